@@ -1,0 +1,111 @@
+#include "core/atomic_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "core/errors.h"
+
+namespace coaxid {
+namespace {
+
+[[noreturn]] void Fail(const std::string& path, const char* what, int error) {
+  throw InputError(path + ": " + what + ": " + std::strerror(error));
+}
+
+// Writes all of [data, data + size), retrying short writes and EINTR. Returns errno or 0.
+int WriteAll(int fd, const char* data, size_t size) {
+  while (size > 0) {
+    const ssize_t n = ::write(fd, data, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return errno;
+    }
+    data += n;
+    size -= static_cast<size_t>(n);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void WriteFileAtomically(const std::string& path, const std::string& contents) {
+  // The temporary file lives in the destination folder so that rename() is atomic
+  // (same file system) and a crash leaves at most a stray *.tmp.* file, never a
+  // truncated target.
+  std::string tmp = path + ".tmp.XXXXXX";
+  std::vector<char> tmp_buffer(tmp.begin(), tmp.end());
+  tmp_buffer.push_back('\0');
+  const int fd = ::mkstemp(tmp_buffer.data());
+  if (fd < 0) Fail(path, "cannot create a temporary file to write", errno);
+  tmp.assign(tmp_buffer.data());
+
+  auto fail_and_clean = [&](const char* what, int error) {
+    ::unlink(tmp.c_str());
+    Fail(path, what, error);
+  };
+
+  // mkstemp makes the file 0600; give the result the mode of the file it
+  // replaces, or the usual 0644 for a new file, so outputs stay readable by others.
+  struct stat existing;
+  const mode_t mode = ::stat(path.c_str(), &existing) == 0 ? (existing.st_mode & 07777) : 0644;
+  if (::fchmod(fd, mode) != 0) {
+    const int error = errno;
+    ::close(fd);
+    fail_and_clean("cannot set permissions of the temporary file", error);
+  }
+  if (const int error = WriteAll(fd, contents.data(), contents.size()); error != 0) {
+    ::close(fd);
+    fail_and_clean("cannot write", error);
+  }
+  // close() can report a deferred write error (NFS, full disk); check it.
+  if (::close(fd) != 0) fail_and_clean("cannot write", errno);
+  if (::rename(tmp.c_str(), path.c_str()) != 0) fail_and_clean("cannot rename into place", errno);
+}
+
+std::string ReadFile(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) Fail(path, "cannot open for reading", errno);
+  struct stat info;
+  if (::fstat(fd, &info) != 0) {
+    const int error = errno;
+    ::close(fd);
+    Fail(path, "cannot read", error);
+  }
+  if (S_ISDIR(info.st_mode)) {
+    ::close(fd);
+    Fail(path, "cannot read", EISDIR);
+  }
+  // One allocation of the right size and one read for regular files; the loop
+  // also copes with pipes and files that grow while being read.
+  std::string contents(info.st_size > 0 ? static_cast<size_t>(info.st_size) : 0, '\0');
+  size_t used = 0;
+  char chunk[1 << 16];
+  while (true) {
+    char* dest = used < contents.size() ? &contents[used] : chunk;
+    const size_t room = used < contents.size() ? contents.size() - used : sizeof(chunk);
+    const ssize_t n = ::read(fd, dest, room);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int error = errno;
+      ::close(fd);
+      Fail(path, "cannot read", error);
+    }
+    if (n == 0) break;
+    if (dest == chunk) {
+      contents.resize(used);
+      contents.append(chunk, static_cast<size_t>(n));
+    }
+    used += static_cast<size_t>(n);
+  }
+  ::close(fd);
+  contents.resize(used);
+  return contents;
+}
+
+}  // namespace coaxid

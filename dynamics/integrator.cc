@@ -1,0 +1,486 @@
+#include "dynamics/integrator.h"
+
+#include <cvodes/cvodes.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+#include <utility>
+
+#include <glog/logging.h>
+
+#include "core/errors.h"
+
+namespace coaxid {
+
+int coaxid_integrator_hint_experiment = 3;  // TEMPORARY (experiment): 0 none, 1 hlast, 2 h0, 3 hprime
+
+namespace {
+
+// CVODE return codes for user callbacks: 0 success, > 0 recoverable (CVODE retries with a
+// smaller step), < 0 unrecoverable (CVODE stops).
+constexpr int kCallbackOk = 0;
+constexpr int kCallbackRecoverable = 1;
+constexpr int kCallbackFatal = -1;
+
+std::string FlagName(int flag) {
+  // CVodeGetReturnFlagName returns a malloc'ed string.
+  char* name = CVodeGetReturnFlagName(flag);
+  std::string result = name != nullptr ? name : "CV_UNKNOWN";
+  std::free(name);
+  return result;
+}
+
+}  // namespace
+
+bool IntegratorOptions::IsValid(std::string* why) const {
+  auto fail = [why](const std::string& message) {
+    if (why != nullptr) *why = message;
+    return false;
+  };
+  if (!(std::isfinite(relative_tolerance) && relative_tolerance > 0.0)) {
+    return fail("relative_tolerance must be finite and > 0");
+  }
+  if (!(std::isfinite(absolute_tolerance) && absolute_tolerance > 0.0)) {
+    return fail("absolute_tolerance must be finite and > 0");
+  }
+  if (relative_tolerance >= 1.0) return fail("relative_tolerance must be < 1");
+  if (max_steps_per_interval <= 0) return fail("max_steps_per_interval must be > 0");
+  const int order_limit = method == Method::kAdams ? 12 : 5;
+  if (max_order < 0 || max_order > order_limit) {
+    return fail("max_order must be in [0, " + std::to_string(order_limit) + "] for " +
+                (method == Method::kAdams ? "Adams" : "BDF") + " (0 = CVODE default)");
+  }
+  return true;
+}
+
+struct Integrator::Impl {
+  Impl(const OdeSystem& system_in, const IntegratorOptions& options_in,
+       const SensitivityOptions& sens_in);
+  ~Impl();
+  void Release();  // Frees all SUNDIALS memory; idempotent.
+
+  bool Reset(double t0, const Eigen::VectorXd& x0, const Eigen::MatrixXd* S0);
+  bool AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd* S);
+  bool Fail(const std::string& message);
+
+  // CVODE callbacks; user_data is the Impl.
+  static int RhsCallback(double t, N_Vector y, N_Vector ydot, void* user_data);
+  static int SensRhsCallback(int ns, double t, N_Vector y, N_Vector ydot, N_Vector* yS,
+                             N_Vector* ySdot, void* user_data, N_Vector tmp1, N_Vector tmp2);
+  static int JacCallback(double t, N_Vector y, N_Vector fy, SUNMatrix J, void* user_data,
+                         N_Vector tmp1, N_Vector tmp2, N_Vector tmp3);
+  static void ErrorCallback(int error_code, const char* module, const char* function, char* msg,
+                            void* user_data);
+
+  // Evaluates df/dx and (with parameter sensitivities) df/dp at (t, y) into dfdx_, dfdp_ unless
+  // they are already there. CVODES's staggered corrector evaluates the sensitivity RHS several
+  // times at the same converged state (once per corrector iteration), so this keeps it to one
+  // OdeSystem::Jacobians call per step.
+  bool SensitivityJacobians(double t, const double* y);
+
+  const OdeSystem& system;
+  const IntegratorOptions options;
+  const int n;
+  const int p;            // Parameter columns carried (0 unless wrt_parameters).
+  const int state_cols;   // Initial-state columns carried (0 or n).
+  const int ns;           // state_cols + p.
+
+  SUNContext context = nullptr;
+  void* cvode = nullptr;
+  N_Vector y = nullptr;
+  N_Vector* yS = nullptr;
+  SUNMatrix matrix = nullptr;
+  SUNLinearSolver linear_solver = nullptr;
+  SUNNonlinearSolver nonlinear_solver = nullptr;       // Fixed point for the state, if used.
+  SUNNonlinearSolver sens_nonlinear_solver = nullptr;  // Fixed point for sensitivities, if used.
+
+  Eigen::MatrixXd jac_dfdx;  // Newton Jacobian scratch, n x n.
+  Eigen::MatrixXd dfdx;      // Sensitivity Jacobians at (cache_t, cache_y).
+  Eigen::MatrixXd dfdp;
+  Eigen::VectorXd cache_y;
+  double cache_t = 0.0;
+  bool cache_valid = false;
+
+  bool ready = false;        // Reset() succeeded and no AdvanceTo() failed since.
+  bool fresh_start = false;  // No step taken since the last Reset().
+  double t = 0.0;
+  double step_hint = 0.0;  // 0 = none yet.
+
+  std::string error;           // last_error().
+  std::string cvode_message;   // Last message CVODE passed to the error handler.
+  std::string callback_error;  // Why a callback failed (more specific than CVODE's message).
+
+  long completed_steps = 0;  // Steps of runs before the last ReInit.
+  long rhs_evals = 0;
+  long jac_evals = 0;
+  long restarts = 0;
+};
+
+Integrator::Impl::Impl(const OdeSystem& system_in, const IntegratorOptions& options_in,
+                       const SensitivityOptions& sens_in)
+    : system(system_in),
+      options(options_in),
+      n(system_in.NumStates()),
+      p(sens_in.wrt_parameters ? system_in.NumSensitivityParameters() : 0),
+      state_cols(sens_in.wrt_initial_state ? system_in.NumStates() : 0),
+      ns(state_cols + p) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("IntegratorOptions: " + why);
+  if (n <= 0) throw InputError("Integrator: the OdeSystem has no states");
+  if (p < 0) throw InputError("Integrator: negative NumSensitivityParameters()");
+
+  auto check = [this](int flag, const char* what) {
+    if (flag != 0) {
+      throw ComputationError(std::string("Integrator: ") + what + " failed (" + FlagName(flag) +
+                             "): " + cvode_message);
+    }
+  };
+  auto check_ptr = [](const void* ptr, const char* what) {
+    if (ptr == nullptr) throw ComputationError(std::string("Integrator: ") + what + " failed");
+  };
+  try {
+    check(SUNContext_Create(nullptr, &context), "SUNContext_Create");
+    cvode = CVodeCreate(options.method == IntegratorOptions::Method::kAdams ? CV_ADAMS : CV_BDF,
+                        context);
+    check_ptr(cvode, "CVodeCreate");
+    // First thing: route CVODE's messages to last_error() instead of stderr.
+    check(CVodeSetErrHandlerFn(cvode, &Impl::ErrorCallback, this), "CVodeSetErrHandlerFn");
+    y = N_VNew_Serial(n, context);
+    check_ptr(y, "N_VNew_Serial");
+    N_VConst(0.0, y);
+    // All allocation happens here, once; Reset() only re-initialises.
+    check(CVodeInit(cvode, &Impl::RhsCallback, 0.0, y), "CVodeInit");
+    check(CVodeSetUserData(cvode, this), "CVodeSetUserData");
+    check(CVodeSStolerances(cvode, options.relative_tolerance, options.absolute_tolerance),
+          "CVodeSStolerances");
+    check(CVodeSetMaxNumSteps(cvode, options.max_steps_per_interval), "CVodeSetMaxNumSteps");
+    if (options.max_order > 0) check(CVodeSetMaxOrd(cvode, options.max_order), "CVodeSetMaxOrd");
+    // "t + h = t" warnings would only fill the error handler; a step that small fails anyway.
+    check(CVodeSetMaxHnilWarns(cvode, -1), "CVodeSetMaxHnilWarns");
+
+    if (options.newton) {
+      matrix = SUNDenseMatrix(n, n, context);
+      check_ptr(matrix, "SUNDenseMatrix");
+      linear_solver = SUNLinSol_Dense(y, matrix, context);
+      check_ptr(linear_solver, "SUNLinSol_Dense");
+      check(CVodeSetLinearSolver(cvode, linear_solver, matrix), "CVodeSetLinearSolver");
+      check(CVodeSetJacFn(cvode, &Impl::JacCallback), "CVodeSetJacFn");
+      jac_dfdx.setZero(n, n);
+      // CVodeInit's default nonlinear solver is already Newton.
+    } else {
+      nonlinear_solver = SUNNonlinSol_FixedPoint(y, 0, context);  // m = 0: no Anderson mixing.
+      check_ptr(nonlinear_solver, "SUNNonlinSol_FixedPoint");
+      check(CVodeSetNonlinearSolver(cvode, nonlinear_solver), "CVodeSetNonlinearSolver");
+    }
+
+    if (ns > 0) {
+      yS = N_VCloneVectorArray(ns, y);
+      check_ptr(yS, "N_VCloneVectorArray");
+      for (int j = 0; j < ns; ++j) N_VConst(0.0, yS[j]);
+      dfdx.setZero(n, n);
+      dfdp.setZero(n, p);
+      cache_y.setZero(n);
+      // Staggered corrector: the state is corrected (and passes its own error test) before any
+      // sensitivity work is done for the step, and all sensitivity iterations of the step then
+      // see the same converged state, so with the cache in SensitivityJacobians() a step costs
+      // one OdeSystem::Jacobians call. CV_SIMULTANEOUS would re-evaluate the Jacobians at every
+      // corrector iterate (2-3 per step with fixed point) and redo sensitivity work for steps
+      // the state error test rejects. The sensitivity equations are linear in S, so the
+      // staggered sensitivity corrector converges in about one iteration.
+      // User data must be set before CVodeSensInit, which copies it for the sensitivity RHS.
+      check(CVodeSensInit(cvode, ns, CV_STAGGERED, &Impl::SensRhsCallback, yS), "CVodeSensInit");
+      // Tolerances for S from those of x (scaled by pbar = 1), and S in the error test, so the
+      // sensitivities are as accurate as the state instead of merely consistent with it.
+      check(CVodeSensEEtolerances(cvode), "CVodeSensEEtolerances");
+      check(CVodeSetSensErrCon(cvode, SUNTRUE), "CVodeSetSensErrCon");
+      if (!options.newton) {
+        // CVodeSensInit attached (and owns) a Newton sensitivity solver; replace it.
+        sens_nonlinear_solver = SUNNonlinSol_FixedPointSens(ns, y, 0, context);
+        check_ptr(sens_nonlinear_solver, "SUNNonlinSol_FixedPointSens");
+        check(CVodeSetNonlinearSolverSensStg(cvode, sens_nonlinear_solver),
+              "CVodeSetNonlinearSolverSensStg");
+      }
+    }
+  } catch (...) {
+    Release();  // The destructor does not run for an object whose constructor threw.
+    throw;
+  }
+}
+
+Integrator::Impl::~Impl() { Release(); }
+
+void Integrator::Impl::Release() {
+  // CVodeFree first: it may still reference the solvers, matrix and vectors.
+  if (cvode != nullptr) CVodeFree(&cvode);
+  if (sens_nonlinear_solver != nullptr) SUNNonlinSolFree(sens_nonlinear_solver);
+  if (nonlinear_solver != nullptr) SUNNonlinSolFree(nonlinear_solver);
+  if (linear_solver != nullptr) SUNLinSolFree(linear_solver);
+  if (matrix != nullptr) SUNMatDestroy(matrix);
+  if (yS != nullptr) N_VDestroyVectorArray(yS, ns);
+  if (y != nullptr) N_VDestroy(y);
+  if (context != nullptr) SUNContext_Free(&context);
+  cvode = nullptr;
+  sens_nonlinear_solver = nonlinear_solver = nullptr;
+  linear_solver = nullptr;
+  matrix = nullptr;
+  yS = nullptr;
+  y = nullptr;
+}
+
+bool Integrator::Impl::Fail(const std::string& message) {
+  error = message;
+  ready = false;
+  return false;
+}
+
+bool Integrator::Impl::Reset(double t0, const Eigen::VectorXd& x0, const Eigen::MatrixXd* S0) {
+  CHECK_EQ(x0.size(), n) << "Integrator::Reset: x0 has the wrong size";
+  ++restarts;
+  cvode_message.clear();
+  callback_error.clear();
+  if (!std::isfinite(t0) || !x0.allFinite()) {
+    return Fail("Integrator::Reset: non-finite t0 or x0");
+  }
+  long steps = 0;
+  CVodeGetNumSteps(cvode, &steps);
+  completed_steps += steps;
+
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y), n) = x0;
+  int flag = CVodeReInit(cvode, t0, y);
+  if (flag != CV_SUCCESS) {
+    return Fail("CVodeReInit failed (" + FlagName(flag) + "): " + cvode_message);
+  }
+  if (ns > 0) {
+    if (S0 != nullptr) {
+      CHECK(S0->rows() == n && S0->cols() == ns)
+          << "Integrator::Reset: S0 is " << S0->rows() << " x " << S0->cols() << ", expected "
+          << n << " x " << ns;
+      if (!S0->allFinite()) return Fail("Integrator::Reset: non-finite S0");
+      for (int j = 0; j < ns; ++j) {
+        Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(yS[j]), n) = S0->col(j);
+      }
+    } else {
+      for (int j = 0; j < ns; ++j) {
+        N_VConst(0.0, yS[j]);
+        if (j < state_cols) N_VGetArrayPointer(yS[j])[j] = 1.0;
+      }
+    }
+    flag = CVodeSensReInit(cvode, CV_STAGGERED, yS);
+    if (flag != CV_SUCCESS) {
+      return Fail("CVodeSensReInit failed (" + FlagName(flag) + "): " + cvode_message);
+    }
+  }
+  t = t0;
+  cache_valid = false;
+  fresh_start = true;
+  ready = true;
+  error.clear();
+  return true;
+}
+
+bool Integrator::Impl::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd* S) {
+  CHECK(x != nullptr);
+  if (!ready) {
+    return Fail(error.empty() ? "Integrator::AdvanceTo called before Reset()"
+                              : "Integrator::AdvanceTo after a failure without Reset(); first "
+                                "failure: " + error);
+  }
+  if (!(t1 > t)) {  // Also rejects NaN.
+    std::ostringstream message;
+    message.precision(17);
+    message << "Integrator::AdvanceTo: t1 = " << t1 << " is not after the current time " << t;
+    error = message.str();
+    return false;  // Nothing was done; the integrator stays usable.
+  }
+  cvode_message.clear();
+  callback_error.clear();
+  // The concrete system may have changed its held input since the last call.
+  cache_valid = false;
+
+  int flag = CVodeSetStopTime(cvode, t1);
+  if (flag != CV_SUCCESS) {
+    return Fail("CVodeSetStopTime failed (" + FlagName(flag) + "): " + cvode_message);
+  }
+  double tret = t;
+  const bool learn_hint = fresh_start && options.initial_step_hint;
+  if (fresh_start) {
+    // 0 = let CVODE estimate it (cvHin: several RHS and sensitivity-RHS calls).
+    const double h0 = options.initial_step_hint && coaxid_integrator_hint_experiment != 0 ? std::min(step_hint, t1 - t) : 0.0;
+    flag = CVodeSetInitStep(cvode, h0);
+    if (flag != CV_SUCCESS) {
+      return Fail("CVodeSetInitStep failed (" + FlagName(flag) + "): " + cvode_message);
+    }
+  }
+  if (learn_hint && coaxid_integrator_hint_experiment == 3) {
+    // Take the first step alone to learn the step size CVODE wants next at order 1: after one
+    // step it knows the local error constant, and the next step (still order 1) is sized from
+    // it. That is a good first step for the next interval, whose dynamics are similar.
+    flag = CVode(cvode, t1, y, &tret, CV_ONE_STEP);
+    if (flag >= 0) {
+      double h_next = 0.0;
+      if (CVodeGetCurrentStep(cvode, &h_next) == CV_SUCCESS && h_next > 0.0) {
+        step_hint = h_next;
+      }
+      if (flag == CV_SUCCESS && tret < t1) flag = CVode(cvode, t1, y, &tret, CV_NORMAL);
+    }
+  } else {
+    flag = CVode(cvode, t1, y, &tret, CV_NORMAL);
+  }
+  fresh_start = false;
+  if (flag < 0) {
+    step_hint = 0.0;
+    std::ostringstream message;
+    message.precision(17);
+    message << "CVODES failed (" << FlagName(flag) << ") integrating from " << t << " to " << t1
+            << ": " << cvode_message;
+    if (!callback_error.empty()) message << " [" << callback_error << "]";
+    return Fail(message.str());
+  }
+  if (learn_hint && coaxid_integrator_hint_experiment == 1) {
+    double h_last = 0.0;
+    if (CVodeGetLastStep(cvode, &h_last) == CV_SUCCESS && h_last > 0.0) step_hint = h_last;
+  }
+  if (learn_hint && coaxid_integrator_hint_experiment == 2 && step_hint == 0.0) {
+    double h0 = 0.0;
+    if (CVodeGetActualInitStep(cvode, &h0) == CV_SUCCESS && h0 > 0.0) step_hint = h0;
+  }
+  t = t1;
+  x->resize(n);
+  *x = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(y), n);
+  if (S != nullptr) {
+    S->resize(n, ns);
+    if (ns > 0) {
+      flag = CVodeGetSens(cvode, &tret, yS);
+      if (flag != CV_SUCCESS) {
+        return Fail("CVodeGetSens failed (" + FlagName(flag) + "): " + cvode_message);
+      }
+      for (int j = 0; j < ns; ++j) {
+        S->col(j) = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(yS[j]), n);
+      }
+    }
+  }
+  return true;
+}
+
+int Integrator::Impl::RhsCallback(double t, N_Vector y, N_Vector ydot, void* user_data) {
+  Impl* self = static_cast<Impl*>(user_data);
+  ++self->rhs_evals;
+  double* xdot = N_VGetArrayPointer(ydot);
+  if (!self->system.Rhs(t, N_VGetArrayPointer(y), xdot)) {
+    // The model says it cannot be evaluated here (blown-up parameters): a smaller step will not
+    // help, so stop at once.
+    self->callback_error = "OdeSystem::Rhs returned false at t = " + std::to_string(t);
+    return kCallbackFatal;
+  }
+  for (int i = 0; i < self->n; ++i) {
+    if (!std::isfinite(xdot[i])) {
+      // Typically a wild trial iterate of an oversized step: let CVODE retry with a smaller
+      // one (it gives up after a few such failures in a row).
+      self->callback_error = "OdeSystem::Rhs returned a non-finite derivative at t = " +
+                             std::to_string(t);
+      return kCallbackRecoverable;
+    }
+  }
+  return kCallbackOk;
+}
+
+bool Integrator::Impl::SensitivityJacobians(double t_eval, const double* y_eval) {
+  const Eigen::Map<const Eigen::VectorXd> y_map(y_eval, n);
+  if (cache_valid && t_eval == cache_t && y_map == cache_y) return true;
+  ++jac_evals;
+  cache_valid = false;
+  if (!system.Jacobians(t_eval, y_eval, &dfdx, p > 0 ? &dfdp : nullptr)) {
+    callback_error = "OdeSystem::Jacobians returned false at t = " + std::to_string(t_eval);
+    return false;
+  }
+  CHECK(dfdx.rows() == n && dfdx.cols() == n) << "OdeSystem::Jacobians: df/dx has a wrong size";
+  CHECK(p == 0 || (dfdp.rows() == n && dfdp.cols() == p))
+      << "OdeSystem::Jacobians: df/dp has a wrong size";
+  cache_t = t_eval;
+  cache_y = y_map;
+  cache_valid = true;
+  return true;
+}
+
+int Integrator::Impl::SensRhsCallback(int ns, double t, N_Vector y, N_Vector /*ydot*/,
+                                      N_Vector* yS, N_Vector* ySdot, void* user_data,
+                                      N_Vector /*tmp1*/, N_Vector /*tmp2*/) {
+  Impl* self = static_cast<Impl*>(user_data);
+  if (!self->SensitivityJacobians(t, N_VGetArrayPointer(y))) return kCallbackFatal;
+  const int n = self->n;
+  for (int j = 0; j < ns; ++j) {
+    Eigen::Map<Eigen::VectorXd> sdot(N_VGetArrayPointer(ySdot[j]), n);
+    sdot.noalias() = self->dfdx * Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(yS[j]), n);
+    if (j >= self->state_cols) sdot += self->dfdp.col(j - self->state_cols);
+  }
+  return kCallbackOk;
+}
+
+int Integrator::Impl::JacCallback(double t, N_Vector y, N_Vector /*fy*/, SUNMatrix J,
+                                  void* user_data, N_Vector /*tmp1*/, N_Vector /*tmp2*/,
+                                  N_Vector /*tmp3*/) {
+  Impl* self = static_cast<Impl*>(user_data);
+  ++self->jac_evals;
+  if (!self->system.Jacobians(t, N_VGetArrayPointer(y), &self->jac_dfdx, nullptr)) {
+    self->callback_error = "OdeSystem::Jacobians returned false at t = " + std::to_string(t);
+    return kCallbackFatal;
+  }
+  const int n = self->n;
+  CHECK(self->jac_dfdx.rows() == n && self->jac_dfdx.cols() == n)
+      << "OdeSystem::Jacobians: df/dx has a wrong size";
+  // Dense SUNMatrix storage is column-major with leading dimension n, like Eigen's default.
+  Eigen::Map<Eigen::MatrixXd>(SUNDenseMatrix_Data(J), n, n) = self->jac_dfdx;
+  return kCallbackOk;
+}
+
+void Integrator::Impl::ErrorCallback(int error_code, const char* module, const char* function,
+                                     char* msg, void* user_data) {
+  if (error_code == CV_WARNING) return;  // Warnings do not make a call fail.
+  Impl* self = static_cast<Impl*>(user_data);
+  self->cvode_message = std::string(module != nullptr ? module : "") + "::" +
+                        (function != nullptr ? function : "") + ": " +
+                        (msg != nullptr ? msg : "");
+}
+
+Integrator::Integrator(const OdeSystem& system, const IntegratorOptions& options,
+                       const SensitivityOptions& sens)
+    : impl_(std::make_unique<Impl>(system, options, sens)) {}
+
+Integrator::~Integrator() = default;
+Integrator::Integrator(Integrator&&) noexcept = default;
+Integrator& Integrator::operator=(Integrator&&) noexcept = default;
+
+bool Integrator::Reset(double t0, const Eigen::VectorXd& x0, const Eigen::MatrixXd* S0) {
+  return impl_->Reset(t0, x0, S0);
+}
+
+bool Integrator::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd* S) {
+  return impl_->AdvanceTo(t1, x, S);
+}
+
+const std::string& Integrator::last_error() const { return impl_->error; }
+
+int Integrator::num_sensitivities() const { return impl_->ns; }
+
+double Integrator::time() const { return impl_->t; }
+
+Integrator::Stats Integrator::stats() const {
+  Stats stats;
+  long steps = 0;
+  CVodeGetNumSteps(impl_->cvode, &steps);
+  stats.steps = impl_->completed_steps + steps;
+  stats.rhs_evals = impl_->rhs_evals;
+  stats.jac_evals = impl_->jac_evals;
+  stats.restarts = impl_->restarts;
+  return stats;
+}
+
+}  // namespace coaxid

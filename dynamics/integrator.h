@@ -1,0 +1,104 @@
+// Variable-step, variable-order integration of an OdeSystem with SUNDIALS CVODES, optionally
+// carrying forward sensitivities
+//
+//   S = dx/d[x0 | theta],   dS/dt = df/dx * S + [0 | df/dtheta],
+//   S(t0) = [I | 0]  (or a caller-supplied S0).
+//
+// The inputs are held constant between samples (core/input_hold.h), so the
+// right-hand side is discontinuous at every sample time. The simulator
+// therefore restarts the integrator at every input change (every 5 ms):
+// Reset() at t_k, AdvanceTo(t_{k+1}) with a stop time so that no step crosses
+// the discontinuity, and so on. Reset() is a cheap CVodeReInit (no
+// allocation), and by default the first step of each interval is guessed from
+// the previous interval instead of CVODE's initial-step estimator (which costs
+// several extra RHS and sensitivity-RHS evaluations per restart).
+//
+// Hot numeric code: AdvanceTo() and Reset() return false (never throw, never
+// abort, never print) and last_error() says why. Bad options are the caller's
+// problem: the constructor throws InputError. Size mismatches are bugs: CHECK.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "dynamics/ode_system.h"
+
+namespace coaxid {
+
+struct IntegratorOptions {
+  enum class Method { kAdams, kBdf };
+  Method method = Method::kAdams;
+  // Newton iteration with the dense Jacobian from OdeSystem::Jacobians; false = fixed-point
+  // (functional) iteration, which needs no Jacobian and suits non-stiff models with Adams.
+  bool newton = false;
+  double relative_tolerance = 1e-7;  // CVODE rtol (dimensionless).
+  double absolute_tolerance = 1e-9;  // CVODE atol, in the units of each state.
+  // CVODE mxstep: internal steps allowed in one AdvanceTo() before it fails.
+  int max_steps_per_interval = 5000;
+  int max_order = 0;  // 0 = CVODE default (12 for Adams, 5 for BDF).
+  // Start each interval after a Reset() with a step size learned from the previous interval
+  // (the order-1 step CVODE chose after its first step there) instead of CVODE's initial-step
+  // estimator. Measured in bench/integrator_bench.cc.
+  bool initial_step_hint = true;
+
+  bool IsValid(std::string* why) const;
+};
+
+// Which forward sensitivities to carry: columns [initial state (n) if wrt_initial_state] then
+// [parameters (p = OdeSystem::NumSensitivityParameters()) if wrt_parameters].
+struct SensitivityOptions {
+  bool wrt_initial_state = false;
+  bool wrt_parameters = false;
+};
+
+class Integrator {
+ public:
+  // `system` must outlive the Integrator. Throws InputError if !options.IsValid() or the system
+  // has no states; ComputationError if SUNDIALS cannot allocate its memory.
+  Integrator(const OdeSystem& system, const IntegratorOptions& options,
+             const SensitivityOptions& sens = {});
+  ~Integrator();  // Frees all SUNDIALS memory.
+  Integrator(const Integrator&) = delete;
+  Integrator& operator=(const Integrator&) = delete;
+  Integrator(Integrator&&) noexcept;
+  Integrator& operator=(Integrator&&) noexcept;
+
+  // (Re)starts at t0 from x0 (size n). With sensitivities, S0 (n x ns) is the initial
+  // sensitivity matrix; nullptr means the natural one ([I | 0] for initial-state columns, 0 for
+  // parameter columns). Without sensitivities S0 is ignored. Cheap: CVodeReInit and
+  // CVodeSensReInit on memory allocated by the constructor. Call it at every input change.
+  // Returns false on a CVODE error (then last_error() says why).
+  bool Reset(double t0, const Eigen::VectorXd& x0, const Eigen::MatrixXd* S0 = nullptr);
+
+  // Integrates from the current time to t1 > current time without stepping past t1 (stop time
+  // t1), and writes the state at t1 to *x and, if S is not null, the sensitivities (n x ns) to
+  // *S. The system's held input must not change during the call; change it between calls and
+  // then Reset(). Returns false (never throws, never aborts) on any CVODE failure, when
+  // OdeSystem::Rhs or ::Jacobians returns false or Rhs returns a non-finite value, when Reset()
+  // has not been called since construction or since the last failure, or when t1 is not after
+  // the current time; then last_error() says why, and *x, *S are unspecified.
+  bool AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd* S = nullptr);
+
+  // Why the last failed call failed; empty after a successful Reset().
+  const std::string& last_error() const;
+  // ns: number of sensitivity columns (0 if none).
+  int num_sensitivities() const;
+  // Current time (the t0 of the last Reset() or the t1 of the last successful AdvanceTo()).
+  double time() const;
+
+  // Counters summed since construction (CVODE's own counters restart at every ReInit):
+  // internal steps, OdeSystem::Rhs calls, OdeSystem::Jacobians calls (Newton and
+  // sensitivities), and Reset() calls.
+  struct Stats {
+    long steps = 0, rhs_evals = 0, jac_evals = 0, restarts = 0;
+  };
+  Stats stats() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace coaxid

@@ -1,0 +1,23 @@
+// Jacobians of the 12-state derivative by automatic differentiation
+// (ceres::Jet) of the one templated model (STYLE.md, item 3): the integrator's
+// Newton matrix, the CVODES sensitivity equations and the EKF all use these.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/input_hold.h"
+#include "dynamics/vehicle_model.h"
+
+namespace coaxid {
+
+// f = xdot(theta, x, input). dfdx: 12 x 12. dfdp (optional): 12 x P with
+// column k = df/dtheta[parameter_indices[k]]. Returns false if any entry is
+// not finite.
+bool DerivativeJacobians(const VehicleModel& model, const Eigen::VectorXd& theta,
+                         const double* x, const InputVector& input,
+                         const std::vector<int>& parameter_indices, Eigen::MatrixXd* dfdx,
+                         Eigen::MatrixXd* dfdp);
+
+}  // namespace coaxid

@@ -1,0 +1,184 @@
+// The GLMAV model of the paper (eqs. 6-49) with model.md's decisions and any
+// enabled effects of the library, written once and templated on the scalar
+// type: the simulator runs it with double, the EKF's Jacobians and Ceres with
+// ceres::Jet (STYLE.md, item 1). The model holds structure only (which
+// effects, which sigma model); every number comes in through theta, the
+// full parameter vector of a ParameterSet (STYLE.md, item 2).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <memory>
+
+#include "core/parameters.h"
+#include "core/vehicle_config.h"
+#include "dynamics/effects/effect_library.h"
+#include "dynamics/interference_loss.h"
+#include "dynamics/rigid_body.h"
+#include "dynamics/state.h"
+
+namespace coaxid {
+
+// Smoothing scales for the two kinks of the model (STYLE.md, item 7): the
+// wake-speed radicand of eq. 46 (m^2/s^2) and the airspeed norm of eq. 25
+// (m/s). At hover the radicand is ~45 m^2/s^2, so the change is ~1e-14.
+inline constexpr double kWakeRadicandSmoothing = 1e-6;
+inline constexpr double kAirspeedSmoothing = 1e-6;
+
+class VehicleModel {
+ public:
+  // The paper's model: parametric sigma, no effect.
+  VehicleModel() { effect_offset_.fill(-1); }
+  // effect_offset[i]: index in theta of library effect i's first parameter,
+  // or -1 if the effect is off. A table model needs a table.
+  VehicleModel(InterferenceModel interference, std::shared_ptr<const SigmaTable> table,
+               const std::array<int, kNumEffects>& effect_offset);
+
+  bool EffectEnabled(int library_index) const { return effect_offset_[library_index] >= 0; }
+  int EffectOffset(int library_index) const { return effect_offset_[library_index]; }
+  InterferenceModel interference() const { return interference_; }
+
+  // Aerodynamic loads in body axes, gravity excluded (eqs. 6-33; in the
+  // balance setting eqs. 57-63 with model.md decision 5). x is the 12-state
+  // vector in flight and ignored (nullptr allowed) in the balance setting,
+  // where u = v = w = 0, no rotation and level attitude.
+  template <typename T>
+  AeroLoads<T> Loads(const T* theta, const T* input, Setting setting, const T* x) const;
+
+  // The 12-state derivative (eqs. 34-49).
+  template <typename T>
+  void Derivative(const T* theta, const T* x, const T* input, T* xdot) const;
+
+  // Accelerometer output (model.md, decision 7): specific force in body axes,
+  // (T + f_body + effect forces) / m, gravity excluded [m/s^2].
+  template <typename T>
+  Vec3<T> SpecificForce(const T* theta, const T* x, const T* input) const {
+    return Loads(theta, input, Setting::kFlight, x).force_B / theta[kMass];
+  }
+
+ private:
+  // Loads() with the body-to-earth rotation already known (flight).
+  template <typename T>
+  AeroLoads<T> LoadsGivenRotation(const T* theta, const T* input, Setting setting, const T* x,
+                                  const Mat3<T>& R_EB) const;
+
+  // Calls f(Effect{}, effect parameters) for each enabled effect.
+  template <typename T, typename F>
+  void ForEachEnabledEffect(const T* theta, F&& f) const {
+    ForEachEffectType([&](auto effect, int i) {
+      if (effect_offset_[i] >= 0) f(effect, theta + effect_offset_[i]);
+    });
+  }
+
+  InterferenceModel interference_ = InterferenceModel::kParametric;
+  std::shared_ptr<const SigmaTable> table_;
+  std::array<int, kNumEffects> effect_offset_;
+  bool any_effect_ = false;
+};
+
+template <typename T>
+AeroLoads<T> VehicleModel::Loads(const T* theta, const T* input, Setting setting,
+                                 const T* x) const {
+  const Mat3<T> R_EB = setting == Setting::kFlight
+                           ? BodyToEarth(x[kPhi], x[kTheta], x[kPsi])
+                           : Mat3<T>(Mat3<T>::Identity());
+  return LoadsGivenRotation(theta, input, setting, x, R_EB);
+}
+
+template <typename T>
+AeroLoads<T> VehicleModel::LoadsGivenRotation(const T* theta, const T* input, Setting setting,
+                                              const T* x, const Mat3<T>& R_EB) const {
+  using std::cos;
+  using std::sin;
+  using std::sqrt;
+  const T& alpha = theta[kAlpha];
+  const T& beta = theta[kBeta];
+  const T& rho = theta[kAirDensity];
+  const T w1 = input[kOmega1] * input[kOmega1];
+  const T w2 = input[kOmega2] * input[kOmega2];
+  T delta_cx = input[kDeltaCx];
+  T delta_cy = input[kDeltaCy];
+  if (any_effect_) {
+    ForEachEnabledEffect(theta, [&](auto effect, const T* p) {
+      decltype(effect)::AdjustInputs(p, &delta_cx, &delta_cy);
+    });
+  }
+  const T cx = cos(delta_cx), sx = sin(delta_cx);
+  const T cy = cos(delta_cy), sy = sin(delta_cy);
+
+  // Interference loss (eq. 12; model.md, decision 1).
+  const T sigma = interference_ == InterferenceModel::kTable
+                      ? InterferenceLossFromTable(*table_, input[kOmega1], input[kOmega2])
+                      : InterferenceLoss(theta[kSigma0], input[kOmega1], input[kOmega2]);
+
+  AeroLoads<T> loads;
+  // Rotor forces, eqs. 6, 9, 12-13: sigma on the z-components only.
+  loads.Z1 = sigma * alpha * w1;
+  loads.Z2 = sigma * beta * cx * cy * w2;
+  const Vec3<T> T2_B(-beta * sy * cx * w2, -beta * sx * w2, loads.Z2);
+  const T rotor_z = loads.Z1 + loads.Z2;  // [T]_zb, eq. 12
+
+  // Airflow, eqs. 43-46 (eqs. 21-23): V_tot = V_prop - V_body + V_wind.
+  // Eq. 46 with model.md decision 3: V_prop = sqrt(max(radicand, 0)), smoothed.
+  const T radicand = T(-2) * rotor_z / (rho * T(M_PI) * theta[kRotorRadius] * theta[kRotorRadius]);
+  const T v_prop = sqrt(T(0.5) * (radicand + sqrt(radicand * radicand +
+                                                  T(kWakeRadicandSmoothing * kWakeRadicandSmoothing))));
+  const bool flight = setting == Setting::kFlight;
+  Vec3<T> v_B = Vec3<T>::Zero(), w_B = Vec3<T>::Zero();
+  T height(1e6);  // a balance is far from the floor (sect. 3)
+  if (flight) {
+    v_B << x[kU], x[kV], x[kW];
+    w_B << x[kP], x[kQ], x[kR];
+    height = -x[kZ];
+  }
+  Vec3<T> wind_E = Vec3<T>::Zero();
+  if (any_effect_) {
+    ForEachEnabledEffect(theta, [&](auto effect, const T* p) {
+      decltype(effect)::AddWindEarth(p, &wind_E);
+    });
+  }
+  const Vec3<T> wind_B = R_EB.transpose() * wind_E;  // earth -> body
+  const T V_ux = -v_B[0] + wind_B[0];           // eq. 43
+  const T V_vy = -v_B[1] + wind_B[1];           // eq. 44
+  const T V_wz = v_prop - v_B[2] + wind_B[2];   // eq. 45
+  const T V_tot = sqrt(V_ux * V_ux + V_vy * V_vy + V_wz * V_wz +
+                       T(kAirspeedSmoothing * kAirspeedSmoothing));  // eq. 25
+
+  // Body force, eq. 24 with plus signs on all axes (model.md, decision 2).
+  const T half_rho = T(0.5) * rho;
+  const T S_c = T(2) * theta[kBodyRadius] * theta[kBodyLength];                 // eq. 26
+  const T S_s = T(M_PI) * theta[kBodyRadius] * theta[kBodyRadius];            // eq. 26
+  loads.force_B << T2_B[0] + half_rho * S_c * theta[kCx] * V_ux * V_tot,       // eq. 13 + 24
+      T2_B[1] + half_rho * S_c * theta[kCy] * V_vy * V_tot,                    //
+      rotor_z + half_rho * S_s * theta[kCz] * V_wz * V_tot;                    //
+
+  // Moments, eqs. 31-33 (model.md, decision 4); the body force makes none.
+  const T& d = theta[kHubDistance];
+  loads.N1 = theta[kGamma1] * w1;
+  loads.N2 = theta[kGamma2] * w2;
+  loads.moment_B << -d * beta * sx * w2,  // eq. 31
+      d * beta * sy * cx * w2,            // eq. 32
+      loads.N1 + loads.N2;                // eq. 33
+
+  if (any_effect_) {
+    const EffectContext<T> context{theta, setting, input[kOmega1], input[kOmega2], delta_cx,
+                                   delta_cy, sigma, T2_B, rotor_z, v_B, w_B, height};
+    ForEachEnabledEffect(theta, [&](auto effect, const T* p) {
+      decltype(effect)::AddLoads(context, p, &loads);
+    });
+  }
+  return loads;
+}
+
+template <typename T>
+void VehicleModel::Derivative(const T* theta, const T* x, const T* input, T* xdot) const {
+  const Mat3<T> R_EB = BodyToEarth(x[kPhi], x[kTheta], x[kPsi]);
+  const AeroLoads<T> loads = LoadsGivenRotation(theta, input, Setting::kFlight, x, R_EB);
+  // Weight in body axes, eq. 27: R_EB^T (0, 0, m g); total force eq. 28.
+  const T mg = theta[kMass] * theta[kGravity];
+  const Vec3<T> F_B = loads.force_B + mg * Vec3<T>(R_EB(2, 0), R_EB(2, 1), R_EB(2, 2));
+  RigidBodyDerivative(x, R_EB, F_B, loads.moment_B, theta[kMass], theta[kIxx], theta[kIyy],
+                      theta[kIzz], xdot);
+}
+
+}  // namespace coaxid

@@ -1,0 +1,204 @@
+#include "experiments/cli.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "core/atomic_file.h"
+#include "core/errors.h"
+#include "core/log.h"
+#include "core/report.h"
+#include "dynamics/vehicle.h"
+#include "experiments/cli_flags.h"
+#include "experiments/log_summary.h"
+#include "experiments/scenario.h"
+#include "experiments/simulate_experiment.h"
+
+namespace coaxid {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kUsage =
+    "usage: coaxid <subcommand> [--flags]\n"
+    "  simulate --config=F --scenario=S --out=FILE.csv [--truth=T.json] [--seed=N]\n"
+    "  check    --logs=A.csv[,B.csv...]\n"
+    "  demo     --out=DIR\n"
+    "Run `coaxid --help` for every flag.\n";
+
+void RequireFlag(const std::string& value, const char* name) {
+  if (value.empty()) throw InputError(std::string("missing --") + name + "\n" + kUsage);
+}
+
+// Creates the output folder (and parents). Throws InputError if impossible.
+void MakeOutputFolder(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) {
+    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
+  }
+}
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+int Simulate() {
+  RequireFlag(FLAGS_config, "config");
+  RequireFlag(FLAGS_scenario, "scenario");
+  RequireFlag(FLAGS_out, "out");
+  const VehicleConfig config = LoadVehicleConfig(FLAGS_config);
+  Scenario scenario = LoadScenario(FLAGS_scenario);
+  if (FLAGS_seed >= 0) scenario.seed = static_cast<uint64_t>(FLAGS_seed);
+  const Vehicle truth = MakeTruthVehicle(config, scenario);
+  const auto start = std::chrono::steady_clock::now();
+  const Log log = SimulateScenario(truth, scenario);
+  // Write only after everything succeeded: nothing half-written.
+  WriteLog(FLAGS_out, log);
+  if (!FLAGS_truth.empty()) WriteJson(FLAGS_truth, TruthJson(truth));
+  std::fprintf(stderr, "simulate: %s log, %d rows, %.2f s simulated in %.3f s -> %s\n",
+               LogKindName(log.kind), log.NumRows(),
+               log.Column("t").back() - log.Column("t").front(), Seconds(start),
+               FLAGS_out.c_str());
+  return 0;
+}
+
+int Check() {
+  RequireFlag(FLAGS_logs, "logs");
+  const std::vector<std::string> paths = SplitList(FLAGS_logs);
+  if (paths.empty()) throw InputError("--logs names no file");
+  std::vector<Log> logs;
+  for (const std::string& path : paths) logs.push_back(ReadLog(path));
+  for (const Log& log : logs) {
+    const nlohmann::json summary = SummarizeLog(log);
+    std::cout << SummaryMarkdown(log.source, summary);
+  }
+  std::cout << "check: " << logs.size() << " log(s) valid\n";
+  return 0;
+}
+
+// The logs the demo simulates and the project ships (data/glmav/NAME.csv),
+// each from configs/scenarios/NAME.yaml with configs/glmav.yaml.
+const char* const kDemoScenarios[] = {"balance", "balance_points", "flight", "flight_3211"};
+
+int Demo() {
+  RequireFlag(FLAGS_out, "out");
+  const std::string root = FLAGS_data_dir;
+  const std::string config_path = root + "/configs/glmav.yaml";
+  const VehicleConfig config = LoadVehicleConfig(config_path);
+  std::vector<Scenario> scenarios;
+  for (const char* name : kDemoScenarios) {
+    scenarios.push_back(LoadScenario(root + "/configs/scenarios/" + name + ".yaml"));
+  }
+  MakeOutputFolder(FLAGS_out);
+  MakeOutputFolder(FLAGS_out + "/logs");
+
+  std::string markdown =
+      "# coaxid demo\n\nVehicle: `" + config_path +
+      "` (the reference GLMAV of model.md). Each shipped scenario is simulated again from its "
+      "seed and compared with the log the project ships in `data/glmav/`.\n\n";
+  nlohmann::json report = {{"vehicle_config", config_path}, {"logs", nlohmann::json::array()}};
+  const auto start = std::chrono::steady_clock::now();
+  for (size_t i = 0; i < scenarios.size(); ++i) {
+    const Scenario& s = scenarios[i];
+    std::fprintf(stderr, "demo: [%zu/%zu] simulating %s ... ", i + 1, scenarios.size(),
+                 s.name.c_str());
+    const auto t0 = std::chrono::steady_clock::now();
+    const Vehicle truth = MakeTruthVehicle(config, s);
+    Log log = SimulateScenario(truth, s);
+    const std::string out_log = FLAGS_out + "/logs/" + s.name + ".csv";
+    WriteLog(out_log, log);
+    WriteJson(FLAGS_out + "/logs/" + s.name + ".truth.json", TruthJson(truth));
+    log = ReadLog(out_log);
+    const double elapsed = Seconds(t0);
+    std::fprintf(stderr, "%d rows in %.2f s (elapsed %.1f s)\n", log.NumRows(), elapsed,
+                 Seconds(start));
+
+    // Reproducibility: the shipped log must be what the seed gives.
+    const std::string shipped_path = root + "/data/glmav/" + s.name + ".csv";
+    std::string reproduced = "no shipped log to compare with";
+    double max_difference = NAN;
+    if (fs::exists(shipped_path)) {
+      const Log shipped = ReadLog(shipped_path);
+      max_difference = 0;
+      bool same_shape = shipped.columns == log.columns && shipped.NumRows() == log.NumRows();
+      if (same_shape) {
+        for (size_t c = 0; c < log.columns.size(); ++c) {
+          for (int k = 0; k < log.NumRows(); ++k) {
+            const double a = log.values[c][k], b = shipped.values[c][k];
+            if (std::isnan(a) != std::isnan(b)) same_shape = false;
+            if (!std::isnan(a)) max_difference = std::max(max_difference, std::fabs(a - b));
+          }
+        }
+      }
+      reproduced = !same_shape ? "differs in shape from the shipped log"
+                   : max_difference == 0 ? "identical to the shipped log"
+                                         : "differs from the shipped log by at most " +
+                                               std::to_string(max_difference);
+    }
+    const nlohmann::json summary = SummarizeLog(log);
+    markdown += SummaryMarkdown(s.name + " (`logs/" + s.name + ".csv`, seed " +
+                                    std::to_string(s.seed) + "; " + reproduced + ")",
+                                summary);
+    report["logs"].push_back({{"scenario", s.name},
+                              {"log", out_log},
+                              {"truth", FLAGS_out + "/logs/" + s.name + ".truth.json"},
+                              {"simulation_seconds", elapsed},
+                              {"shipped", shipped_path},
+                              {"reproduced", reproduced},
+                              {"summary", summary}});
+  }
+  WriteFileAtomically(FLAGS_out + "/summary.md", markdown);
+  WriteJson(FLAGS_out + "/summary.json", report);
+  std::fprintf(stderr, "demo: done in %.1f s; read %s/summary.md\n", Seconds(start),
+               FLAGS_out.c_str());
+  return 0;
+}
+
+}  // namespace
+
+std::vector<std::string> SplitList(const std::string& list) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (start <= list.size()) {
+    const size_t comma = list.find(',', start);
+    const std::string part =
+        list.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (!part.empty()) out.push_back(part);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+int RunCli(int argc, char** argv) {
+  if (argc < 2) {
+    std::cerr << kUsage;
+    return 2;
+  }
+  const std::string command = argv[1];
+  if (argc > 2) {
+    std::cerr << "coaxid: unexpected argument '" << argv[2] << "'\n" << kUsage;
+    return 2;
+  }
+  try {
+    if (command == "simulate") return Simulate();
+    if (command == "check") return Check();
+    if (command == "demo") return Demo();
+    std::cerr << "coaxid: unknown subcommand '" << command << "'\n" << kUsage;
+    return 2;
+  } catch (const InputError& e) {
+    std::cerr << "coaxid " << command << ": " << e.what() << "\n";
+    return 2;
+  } catch (const ComputationError& e) {
+    std::cerr << "coaxid " << command << ": failed: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "coaxid " << command << ": internal error: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace coaxid

@@ -1,0 +1,12 @@
+// The gflags flags of `coaxid`, declared once for every subcommand.
+#pragma once
+
+#include <gflags/gflags.h>
+
+DECLARE_string(config);
+DECLARE_string(scenario);
+DECLARE_string(out);
+DECLARE_string(truth);
+DECLARE_int64(seed);
+DECLARE_string(logs);
+DECLARE_string(data_dir);

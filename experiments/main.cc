@@ -1,0 +1,13 @@
+// coaxid: identify the flight-dynamics model of a coaxial-rotor MAV.
+#include <gflags/gflags.h>
+#include <glog/logging.h>
+
+#include "experiments/cli.h"
+
+int main(int argc, char** argv) {
+  gflags::SetUsageMessage("coaxid <simulate|check|demo> [--flags]");
+  gflags::ParseCommandLineFlags(&argc, &argv, /*remove_flags=*/true);
+  FLAGS_logtostderr = true;
+  google::InitGoogleLogging(argv[0]);
+  return coaxid::RunCli(argc, argv);
+}

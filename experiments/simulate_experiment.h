@@ -1,0 +1,40 @@
+// Simulated experiments: a truth vehicle (the config's vehicle with the
+// scenario's parameter overrides and effects) run through a scenario, giving a
+// log in the log format. Reproducible from the seed.
+#pragma once
+
+#include <cstdint>
+
+#include <nlohmann/json.hpp>
+
+#include "core/log.h"
+#include "dynamics/integrator.h"
+#include "dynamics/vehicle.h"
+#include "experiments/scenario.h"
+
+namespace coaxid {
+
+// The config's vehicle with the scenario's truth overrides and effects.
+// Throws InputError on an unknown parameter or effect.
+Vehicle MakeTruthVehicle(const VehicleConfig& config, const Scenario& scenario);
+
+// truth.json of cli-and-reports.md: every parameter (known and unknown) and
+// the effects present with their parameters.
+nlohmann::json TruthJson(const Vehicle& truth);
+
+// The paper's static experiment (sect. 3): staircase holds, balance loads of
+// eqs. 57-63 (plus effects) with additive Gaussian noise.
+Log SimulateBalance(const Vehicle& truth, const BalanceScenario& scenario, uint64_t seed);
+
+// Closed-loop flight from hover trim at the first waypoint, the controller
+// fed by noisy sensors, excitation added to its outputs. Throws
+// ComputationError if the integrator fails or the flight leaves the
+// near-hover envelope (attitude beyond 1 rad).
+Log SimulateFlight(const Vehicle& truth, const FlightScenario& scenario, uint64_t seed,
+                   const IntegratorOptions& integrator = {});
+
+// Dispatches on the scenario kind; adds metadata (vehicle, rate_hz, source).
+Log SimulateScenario(const Vehicle& truth, const Scenario& scenario,
+                     const IntegratorOptions& integrator = {});
+
+}  // namespace coaxid
