@@ -48,33 +48,38 @@ std::string FormatDouble(double v) {
 // exponent |e| <= 22. Then w and 10^|e| are exact doubles and one IEEE multiply
 // or divide gives the correctly rounded result, the same double from_chars
 // gives, at a few times its speed. Returns the end of the number, or nullptr
-// for anything else (more digits, nan, inf, malformed): the caller then uses
-// from_chars, which also decides what is an error.
-const char* ParseSimpleDecimal(const char* p, const char* end, double* value) {
+// for anything else (empty, '+', more digits, nan, inf, malformed): the caller
+// then uses from_chars, which also decides what is an error.
+//
+// No end pointer: the text must be followed by a character that is none of
+// digit, '.', 'e', 'E', '+', '-' (the line reader guarantees '\r', '\n' or the
+// string's terminating '\0'), which saves a bounds check per character.
+const char* ParseSimpleDecimal(const char* p, double* value) {
   static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
                                       1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
                                       1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-  auto is_digit = [](char c) { return static_cast<unsigned>(c - '0') < 10; };
-  const bool negative = p < end && *p == '-';
+  auto digit = [](char c) { return static_cast<unsigned>(c - '0'); };
+  const bool negative = *p == '-';
   if (negative) ++p;
-  uint64_t w = 0;  // Wraps silently past 19 digits; `digits` then rejects it.
-  int digits = 0;
-  for (; p < end && is_digit(*p); ++p, ++digits) w = 10 * w + static_cast<unsigned>(*p - '0');
+  const char* const start = p;
+  uint64_t w = 0;  // Wraps silently past 19 digits; the digit count then rejects it.
+  for (; digit(*p) < 10; ++p) w = 10 * w + digit(*p);
+  int digits = static_cast<int>(p - start);
   int exponent = 0;
-  if (p < end && *p == '.') {
-    ++p;
-    const char* fraction = p;
-    for (; p < end && is_digit(*p); ++p, ++digits) w = 10 * w + static_cast<unsigned>(*p - '0');
+  if (*p == '.') {
+    const char* const fraction = ++p;
+    for (; digit(*p) < 10; ++p) w = 10 * w + digit(*p);
     exponent = -static_cast<int>(p - fraction);
+    digits -= exponent;
   }
   if (digits == 0 || digits > 19) return nullptr;
-  if (p < end && (*p == 'e' || *p == 'E')) {
+  if (*p == 'e' || *p == 'E') {
     ++p;
-    const bool exponent_negative = p < end && *p == '-';
-    if (p < end && (*p == '-' || *p == '+')) ++p;
-    if (p == end || !is_digit(*p)) return nullptr;
+    const bool exponent_negative = *p == '-';
+    if (*p == '-' || *p == '+') ++p;
+    if (digit(*p) >= 10) return nullptr;
     int e = 0;
-    for (; p < end && is_digit(*p); ++p) e = std::min(10 * e + (*p - '0'), 100000);
+    for (; digit(*p) < 10; ++p) e = std::min(10 * e + static_cast<int>(digit(*p)), 100000);
     exponent += exponent_negative ? -e : e;
   }
   if (w > (uint64_t{1} << 53) || exponent < -22 || exponent > 22) return nullptr;
@@ -153,7 +158,8 @@ class LineReader {
 // Parses the text of one log; `source` names it in messages.
 class Parser {
  public:
-  Parser(std::string_view text, const std::string& source) : reader_(text), source_(source) {}
+  // A std::string, not a view: its terminating '\0' ends the last line for ParseRow.
+  Parser(const std::string& text, const std::string& source) : reader_(text), source_(source) {}
 
   Log Parse() {
     log_.source = source_;
@@ -298,42 +304,51 @@ class Parser {
     if (log_.NumRows() == 0) Fail(source_, header_line_, "", "no data rows after the header");
   }
 
+  // One data line; `line` is followed by '\r', '\n' or '\0' (see ParseSimpleDecimal).
   void ParseRow(std::string_view line) {
     const char* p = line.data();
     const char* const end = p + line.size();
     const size_t num_columns = log_.columns.size();
     for (size_t j = 0; j < num_columns; ++j) {
       const char* const field = p;
-      while (p < end && IsSpace(*p)) ++p;
-      double value = kNaN;  // An empty field is a missing value.
-      if (p < end && *p != ',') {
-        const char* number = p;
-        // from_chars refuses a leading '+', which other tools may write.
-        if (*number == '+' && number + 1 < end && ((number[1] >= '0' && number[1] <= '9') || number[1] == '.')) {
-          ++number;
-        }
-        p = ParseSimpleDecimal(number, end, &value);
-        if (p == nullptr) {
-          const auto result = std::from_chars(number, end, value);
-          if (result.ec == std::errc::result_out_of_range) {
-            value = ParseOutOfRange(field, end, j);
-          } else if (result.ec != std::errc()) {
-            FailNotNumber(field, end, j);
-          }
-          p = result.ptr;
-        }
-        while (p < end && IsSpace(*p)) ++p;
-        if (p < end && *p != ',') FailNotNumber(field, end, j);
-      }
-      // from_chars also reads "nan" and "inf"; NaN is a missing value, infinity never valid.
-      if (!std::isfinite(value)) CheckNotFinite(value, field, end, j);
+      while (IsSpace(*p)) ++p;
+      double value;
+      const char* const number_end = ParseSimpleDecimal(p, &value);
+      // The fast path gives finite numbers only; everything else is checked in ParseField.
+      p = number_end != nullptr ? number_end : ParseField(field, p, end, j, &value);
+      while (IsSpace(*p)) ++p;
       log_.values[j].push_back(value);
-      if (j + 1 < num_columns) {
-        if (p == end) FailFieldCount(line);
-        ++p;  // The comma.
+      if (*p == ',') {
+        if (j + 1 == num_columns) FailFieldCount(line);
+        ++p;
+      } else if (p == end) {
+        if (j + 1 < num_columns) FailFieldCount(line);
+      } else {
+        FailNotNumber(field, end, j);
       }
     }
-    if (p != end) FailFieldCount(line);
+  }
+
+  // The slow path of a field starting at `p` (spaces skipped): empty, '+',
+  // nan, inf, long mantissas, or not a number. Returns the end of what was read.
+  const char* ParseField(const char* field, const char* p, const char* end, size_t column,
+                         double* value) {
+    if (p == end || *p == ',') {
+      *value = kNaN;  // An empty field is a missing value.
+    } else {
+      // from_chars refuses a leading '+', which other tools may write.
+      if (*p == '+' && ((p[1] >= '0' && p[1] <= '9') || p[1] == '.')) ++p;
+      const auto result = std::from_chars(p, end, *value);
+      if (result.ec == std::errc::result_out_of_range) {
+        *value = ParseOutOfRange(field, end, column);
+      } else if (result.ec != std::errc()) {
+        FailNotNumber(field, end, column);
+      }
+      p = result.ptr;
+    }
+    // from_chars also reads "nan" and "inf"; NaN is a missing value, infinity never valid.
+    if (!std::isfinite(*value)) CheckNotFinite(*value, field, end, column);
+    return p;
   }
 
   // from_chars reports both overflow and underflow as out of range; underflow
@@ -473,7 +488,10 @@ const std::vector<std::string>& InputColumns() {
   return columns;
 }
 
-Log ReadLog(const std::string& path) { return Parser(ReadFile(path), path).Parse(); }
+Log ReadLog(const std::string& path) {
+  const std::string text = ReadFile(path);
+  return Parser(text, path).Parse();
+}
 
 Log ParseLog(const std::string& text, const std::string& source) {
   return Parser(text, source).Parse();

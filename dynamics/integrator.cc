@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <cstdio>
 #include <sstream>
 #include <utility>
 
@@ -156,6 +157,7 @@ Integrator::Impl::Impl(const OdeSystem& system_in, const IntegratorOptions& opti
     y = N_VNew_Serial(n, context);
     check_ptr(y, "N_VNew_Serial");
     N_VConst(0.0, y);
+    if (std::getenv("COAXID_FUSED")) check(N_VEnableFusedOps_Serial(y, SUNTRUE), "N_VEnableFusedOps_Serial");
     // All allocation happens here, once; Reset() only re-initialises.
     check(CVodeInit(cvode, &Impl::RhsCallback, 0.0, y), "CVodeInit");
     check(CVodeSetUserData(cvode, this), "CVodeSetUserData");
@@ -196,16 +198,16 @@ Integrator::Impl::Impl(const OdeSystem& system_in, const IntegratorOptions& opti
       // the state error test rejects. The sensitivity equations are linear in S, so the
       // staggered sensitivity corrector converges in about one iteration.
       // User data must be set before CVodeSensInit, which copies it for the sensitivity RHS.
-      check(CVodeSensInit(cvode, ns, CV_STAGGERED, &Impl::SensRhsCallback, yS), "CVodeSensInit");
+      check(CVodeSensInit(cvode, ns, std::getenv("COAXID_SIM") ? CV_SIMULTANEOUS : CV_STAGGERED, &Impl::SensRhsCallback, yS), "CVodeSensInit");
       // Tolerances for S from those of x (scaled by pbar = 1), and S in the error test, so the
       // sensitivities are as accurate as the state instead of merely consistent with it.
       check(CVodeSensEEtolerances(cvode), "CVodeSensEEtolerances");
       check(CVodeSetSensErrCon(cvode, SUNTRUE), "CVodeSetSensErrCon");
       if (!options.newton) {
         // CVodeSensInit attached (and owns) a Newton sensitivity solver; replace it.
-        sens_nonlinear_solver = SUNNonlinSol_FixedPointSens(ns, y, 0, context);
+        sens_nonlinear_solver = SUNNonlinSol_FixedPointSens(ns + (std::getenv("COAXID_SIM") ? 1 : 0), y, 0, context);
         check_ptr(sens_nonlinear_solver, "SUNNonlinSol_FixedPointSens");
-        check(CVodeSetNonlinearSolverSensStg(cvode, sens_nonlinear_solver),
+        check(std::getenv("COAXID_SIM") ? CVodeSetNonlinearSolverSensSim(cvode, sens_nonlinear_solver) : CVodeSetNonlinearSolverSensStg(cvode, sens_nonlinear_solver),
               "CVodeSetNonlinearSolverSensStg");
       }
     }
@@ -273,7 +275,7 @@ bool Integrator::Impl::Reset(double t0, const Eigen::VectorXd& x0, const Eigen::
         if (j < state_cols) N_VGetArrayPointer(yS[j])[j] = 1.0;
       }
     }
-    flag = CVodeSensReInit(cvode, CV_STAGGERED, yS);
+    flag = CVodeSensReInit(cvode, std::getenv("COAXID_SIM") ? CV_SIMULTANEOUS : CV_STAGGERED, yS);
     if (flag != CV_SUCCESS) {
       return Fail("CVodeSensReInit failed (" + FlagName(flag) + "): " + cvode_message);
     }
@@ -327,7 +329,9 @@ bool Integrator::Impl::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd*
     if (flag >= 0) {
       double h_next = 0.0;
       if (CVodeGetCurrentStep(cvode, &h_next) == CV_SUCCESS && h_next > 0.0) {
-        step_hint = h_next;
+        static const double factor = std::getenv("COAXID_HF") ? std::atof(std::getenv("COAXID_HF")) : 1.0;
+        step_hint = factor * h_next;
+        if (std::getenv("COAXID_DBG") && restarts % 1000 == 5) fprintf(stderr, "hprime %g h0 %g\n", h_next, step_hint);
       }
       if (flag == CV_SUCCESS && tret < t1) flag = CVode(cvode, t1, y, &tret, CV_NORMAL);
     }
@@ -351,6 +355,7 @@ bool Integrator::Impl::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd*
   if (learn_hint && coaxid_integrator_hint_experiment == 2 && step_hint == 0.0) {
     double h0 = 0.0;
     if (CVodeGetActualInitStep(cvode, &h0) == CV_SUCCESS && h0 > 0.0) step_hint = h0;
+    if (std::getenv("COAXID_DBG")) fprintf(stderr, "h0 %g\n", h0);
   }
   t = t1;
   x->resize(n);

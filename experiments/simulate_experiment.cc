@@ -1,6 +1,7 @@
 #include "experiments/simulate_experiment.h"
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "core/errors.h"
@@ -48,6 +49,12 @@ nlohmann::json TruthJson(const Vehicle& truth) {
 }
 
 namespace {
+
+std::string FormatRate(double hz) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", hz);
+  return text;
+}
 
 double NoiseStd(const std::map<std::string, double>& table, const std::string& column) {
   auto it = table.find(column);
@@ -103,7 +110,7 @@ Log SimulateBalance(const Vehicle& truth, const BalanceScenario& s, uint64_t see
   log.columns = {"t", "omega1", "omega2", "delta_cx", "delta_cy"};
   log.columns.insert(log.columns.end(), loads.begin(), loads.end());
   log.values = std::move(cols);
-  if (!s.steady_points) log.metadata["rate_hz"] = std::to_string(s.rate_hz);
+  if (!s.steady_points) log.metadata["rate_hz"] = FormatRate(s.rate_hz);
   log.metadata["layout"] = s.steady_points ? "steady_points" : "time_series";
   return log;
 }
@@ -203,7 +210,7 @@ Log SimulateFlight(const Vehicle& truth, const FlightScenario& s, uint64_t seed,
   log.kind = LogKind::kFlight;
   log.columns = columns;
   log.values = std::move(values);
-  log.metadata["rate_hz"] = std::to_string(s.rate_hz);
+  log.metadata["rate_hz"] = FormatRate(s.rate_hz);
   return log;
 }
 

@@ -1,0 +1,58 @@
+// A 60 s closed-loop flight simulation at 200 Hz control and logging (12,000
+// input changes, one CVODE restart each), sensors and log included: the cost
+// of producing one flight log (issue target: under 50 ms). Also the
+// open-loop replay of 1 s of logged inputs with and without CVODES
+// sensitivities (what one output-error segment costs).
+#include <benchmark/benchmark.h>
+
+#include "dynamics/simulator.h"
+#include "dynamics/trim.h"
+#include "experiments/simulate_experiment.h"
+
+namespace coaxid {
+namespace {
+
+const Vehicle& Reference() {
+  static const Vehicle v = LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
+  return v;
+}
+
+void BM_ClosedLoopFlight60s(benchmark::State& state) {
+  FlightScenario scenario;
+  scenario.duration_s = 60;
+  IntegratorOptions options;
+  options.method = state.range(0) ? IntegratorOptions::Method::kBdf
+                                  : IntegratorOptions::Method::kAdams;
+  options.newton = state.range(0) != 0;
+  for (auto _ : state) {
+    Log log = SimulateFlight(Reference(), scenario, 1, options);
+    benchmark::DoNotOptimize(log.values.data());
+  }
+  state.SetLabel(state.range(0) ? "BDF+Newton" : "Adams+fixed-point");
+}
+BENCHMARK(BM_ClosedLoopFlight60s)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+void BM_ReplayOneSecond(benchmark::State& state) {
+  FlightScenario scenario;
+  scenario.duration_s = 3;
+  static const Log log = SimulateFlight(Reference(), scenario, 1);
+  const InputHold inputs = InputHold::FromLog(log);
+  const Eigen::VectorXd theta = Reference().parameters.Values();
+  const Eigen::VectorXd x0 = TrimHover(Reference().model, theta, 1.5).state;
+  const bool sens = state.range(0) != 0;
+  std::vector<int> unknowns;
+  for (int i = kAlpha; i < kNumBaseParameters; ++i) unknowns.push_back(i);
+  Simulator simulator(Reference().model, theta, {}, {sens, sens}, sens ? unknowns : std::vector<int>{});
+  Trajectory trajectory;
+  for (auto _ : state) {
+    if (!simulator.Run(inputs, 200, 400, x0, &trajectory)) state.SkipWithError("replay failed");
+    benchmark::DoNotOptimize(trajectory.states.data());
+  }
+  state.SetLabel(sens ? "with sensitivities (12 x0 + 12 parameters)" : "states only");
+}
+BENCHMARK(BM_ReplayOneSecond)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace coaxid
+
+BENCHMARK_MAIN();

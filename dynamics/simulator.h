@@ -1,0 +1,53 @@
+// Open-loop simulation of the vehicle over logged zero-order-hold inputs:
+// CVODE(S) restarted at every input change, never stepping across one, with
+// optional forward sensitivities of the state with respect to the initial
+// state and chosen parameters. The output-error segments and the EKF's
+// propagation build on this.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/input_hold.h"
+#include "dynamics/integrator.h"
+#include "dynamics/vehicle_ode.h"
+
+namespace coaxid {
+
+struct Trajectory {
+  std::vector<double> times;                     // the hold's sample times first..last
+  std::vector<Eigen::VectorXd> states;           // x(t_k), 12 each
+  std::vector<Eigen::MatrixXd> sensitivities;    // dx(t_k)/d[x0 | params], if asked
+};
+
+class Simulator {
+ public:
+  // sensitivity_parameters: indices into theta of the parameters whose
+  // sensitivities are carried when sensitivities.wrt_parameters is set.
+  Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
+            const IntegratorOptions& options = {}, const SensitivityOptions& sensitivities = {},
+            std::vector<int> sensitivity_parameters = {});
+
+  void SetTheta(const Eigen::VectorXd& theta) { ode_.SetTheta(theta); }
+
+  // Integrates from x0 at inputs.time(first) to inputs.time(last), one hold
+  // interval at a time, and records the state (and sensitivities) at every
+  // sample first..last. Returns false with last_error() if CVODE fails or the
+  // state stops being finite (blown-up parameters): never throws or aborts.
+  bool Run(const InputHold& inputs, int first, int last, const Eigen::VectorXd& x0,
+           Trajectory* out);
+
+  const std::string& last_error() const { return error_; }
+  const Integrator& integrator() const { return integrator_; }
+
+ private:
+  VehicleOde ode_;
+  Integrator integrator_;
+  SensitivityOptions sensitivity_options_;
+  bool with_sensitivities_;
+  std::string error_;
+};
+
+}  // namespace coaxid

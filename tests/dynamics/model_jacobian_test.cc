@@ -1,0 +1,235 @@
+// DerivativeJacobians (dynamics/model_jacobian.h) against central finite
+// differences of VehicleModel::Derivative (STYLE.md, 10(a)), for df/dx and
+// df/dtheta over every parameter (known, unknown and effect parameters), at
+// seeded random near-hover states, with no effect and with every effect of
+// the library enabled at its typical strength.
+//
+// Step and tolerance. Column j is differenced with h_j = 1e-6 * max(|p_j|, s_j),
+// s_j = 1 (SI unit) for a state and the parameter's own scale (its typical
+// magnitude, configs/glmav.yaml) for a parameter. The central difference's
+// truncation error is h^2 f''' / 6 ~ 1e-12 of the column's scale (f is smooth
+// on the scale s_j near hover: trigonometric in the angles, quadratic-ish in
+// the speeds; the two kinks of the model are smoothed and far away: the wake
+// radicand is ~45 m^2/s^2 and the airspeed ~7 m/s). Its rounding error is
+// ~eps * S_i / h_j, with S_i the size of the terms that make up row i (they
+// cancel at hover, so |f_i| itself is no guide): 1 for position and angle
+// rates, 10 m/s^2 (g) for velocity rates, 1e3 rad/s^2 for body-rate rates
+// (moments of ~0.1 N m over inertias of ~3e-4 kg m^2). The check is
+//   |AD - FD| <= 1e-6 * max_i |FD_ij| + 100 eps S_i / h_j,
+// a million times the truncation error and 100 times the rounding bound, and
+// far below any real Jacobian error (a wrong or swapped column is O(1) wrong).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <gtest/gtest.h>
+
+#include "core/input_hold.h"
+#include "core/parameters.h"
+#include "dynamics/effects/effect_library.h"
+#include "dynamics/model_jacobian.h"
+#include "dynamics/state.h"
+#include "dynamics/vehicle.h"
+#include "dynamics/vehicle_model.h"
+
+namespace coaxid {
+namespace {
+
+constexpr double kRelStep = 1e-6;
+constexpr double kRelTol = 1e-6;
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+
+Vehicle Reference() {
+  return LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
+}
+
+Vehicle AllEffects() {
+  Vehicle v = Reference();
+  for (const auto& info : EffectLibrary()) {
+    std::map<std::string, ParameterOverride> overrides;
+    for (const auto& spec : info.parameters) overrides[spec.name].value = spec.typical;
+    v = WithEffect(v, info.name, overrides);
+  }
+  return v;
+}
+
+// Size of the terms of each row of f (see the header comment).
+double RowTermScale(int row) {
+  if (row >= kU && row <= kW) return 10.0;
+  if (row >= kP) return 1e3;
+  return 1.0;
+}
+
+struct Case {
+  State x;
+  InputVector input;
+};
+
+// Near hover: 0.5 .. 2 m up, slow, nearly level, slowly rotating, inputs
+// around the hover trim (150 / 164 rad/s).
+std::vector<Case> NearHoverCases(unsigned seed, int n) {
+  std::mt19937 rng(seed);
+  auto U = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+  std::vector<Case> cases;
+  for (int k = 0; k < n; ++k) {
+    Case c;
+    c.x << U(-2, 2), U(-2, 2), U(-2, -0.5), U(-0.5, 0.5), U(-0.5, 0.5), U(-0.5, 0.5),
+        U(-0.1, 0.1), U(-0.1, 0.1), U(-M_PI, M_PI), U(-0.3, 0.3), U(-0.3, 0.3), U(-0.3, 0.3);
+    c.input = {150.0 + U(-10, 10), 164.0 + U(-10, 10), U(-0.05, 0.05), U(-0.05, 0.05)};
+    cases.push_back(c);
+  }
+  return cases;
+}
+
+State F(const VehicleModel& model, const Eigen::VectorXd& theta, const State& x,
+        const InputVector& input) {
+  State f;
+  model.Derivative(theta.data(), x.data(), input.data(), f.data());
+  return f;
+}
+
+// Central differences: columns over the states, then over `indices`.
+void FiniteDifferences(const Vehicle& v, const Eigen::VectorXd& theta, const State& x,
+                       const InputVector& input, const std::vector<int>& indices,
+                       Eigen::MatrixXd* dfdx, Eigen::MatrixXd* dfdp, std::vector<double>* hx,
+                       std::vector<double>* hp) {
+  dfdx->resize(kNumStates, kNumStates);
+  dfdp->resize(kNumStates, static_cast<int>(indices.size()));
+  hx->clear();
+  hp->clear();
+  for (int j = 0; j < kNumStates; ++j) {
+    const double h = kRelStep * std::max(std::fabs(x[j]), 1.0);
+    State xp = x, xm = x;
+    xp[j] += h;
+    xm[j] -= h;
+    dfdx->col(j) = (F(v.model, theta, xp, input) - F(v.model, theta, xm, input)) / (2 * h);
+    hx->push_back(h);
+  }
+  for (size_t k = 0; k < indices.size(); ++k) {
+    const int j = indices[k];
+    const double h = kRelStep * std::max(std::fabs(theta[j]), v.parameters[j].scale);
+    Eigen::VectorXd tp = theta, tm = theta;
+    tp[j] += h;
+    tm[j] -= h;
+    dfdp->col(k) = (F(v.model, tp, x, input) - F(v.model, tm, x, input)) / (2 * h);
+    hp->push_back(h);
+  }
+}
+
+void ExpectJacobianNear(const Eigen::MatrixXd& ad, const Eigen::MatrixXd& fd,
+                        const std::vector<double>& steps, const std::vector<std::string>& names,
+                        const std::string& what) {
+  ASSERT_EQ(ad.rows(), fd.rows());
+  ASSERT_EQ(ad.cols(), fd.cols());
+  for (int j = 0; j < ad.cols(); ++j) {
+    const double col_scale = fd.col(j).cwiseAbs().maxCoeff();
+    for (int i = 0; i < ad.rows(); ++i) {
+      const double tol = kRelTol * col_scale + 100 * kEps * RowTermScale(i) / steps[j];
+      EXPECT_NEAR(ad(i, j), fd(i, j), tol)
+          << what << ": d(" << StateName(i) << "_dot)/d(" << names[j] << ")";
+    }
+  }
+}
+
+void CheckVehicle(const Vehicle& v, unsigned seed, const std::string& what) {
+  const Eigen::VectorXd theta = v.parameters.Values();
+  std::vector<int> all(v.parameters.size());
+  std::vector<std::string> param_names, state_names;
+  for (int i = 0; i < v.parameters.size(); ++i) {
+    all[i] = i;
+    param_names.push_back(v.parameters[i].name);
+  }
+  for (int i = 0; i < kNumStates; ++i) state_names.push_back(StateName(i));
+  int k = 0;
+  for (const Case& c : NearHoverCases(seed, 6)) {
+    const std::string where = what + ", case " + std::to_string(k++);
+    Eigen::MatrixXd dfdx, dfdp;
+    ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), c.input, all, &dfdx, &dfdp));
+    Eigen::MatrixXd fdx, fdp;
+    std::vector<double> hx, hp;
+    FiniteDifferences(v, theta, c.x, c.input, all, &fdx, &fdp, &hx, &hp);
+    ExpectJacobianNear(dfdx, fdx, hx, state_names, where + ", dfdx");
+    ExpectJacobianNear(dfdp, fdp, hp, param_names, where + ", dfdp");
+    // Without dfdp the same dfdx (same Jet evaluation of the state columns).
+    Eigen::MatrixXd dfdx_only;
+    ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), c.input, {}, &dfdx_only, nullptr));
+    EXPECT_EQ((dfdx_only - dfdx).cwiseAbs().maxCoeff(), 0.0) << where;
+  }
+}
+
+TEST(ModelJacobianTest, NoEffectMatchesCentralDifferences) {
+  CheckVehicle(Reference(), 1001u, "no effect");
+}
+
+TEST(ModelJacobianTest, AllEffectsMatchCentralDifferences) {
+  const Vehicle v = AllEffects();
+  ASSERT_EQ(v.EffectNames().size(), EffectLibrary().size());
+  CheckVehicle(v, 2002u, "all effects");
+}
+
+// A subset of parameters in arbitrary order: column k is the derivative with
+// respect to parameter_indices[k], whatever the order (the chunking of the
+// Jet directions must not mix them up).
+TEST(ModelJacobianTest, ParameterSubsetInAnyOrder) {
+  const Vehicle v = AllEffects();
+  const Eigen::VectorXd theta = v.parameters.Values();
+  const std::vector<int> indices = {kIzz,
+                                    v.parameters.IndexOrThrow("cg_offset.y_g"),
+                                    kAlpha,
+                                    v.parameters.IndexOrThrow("wind.wn"),
+                                    kHubDistance,
+                                    v.parameters.IndexOrThrow("gyroscopic.J_r"),
+                                    kCx,
+                                    v.parameters.IndexOrThrow("wake_interference.k_Q"),
+                                    kGamma2};
+  std::vector<std::string> names;
+  for (int i : indices) names.push_back(v.parameters[i].name);
+  const Case c = NearHoverCases(3003u, 1)[0];
+  Eigen::MatrixXd dfdx, dfdp, fdx, fdp;
+  std::vector<double> hx, hp;
+  ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), c.input, indices, &dfdx, &dfdp));
+  ASSERT_EQ(dfdp.cols(), static_cast<int>(indices.size()));
+  FiniteDifferences(v, theta, c.x, c.input, indices, &fdx, &fdp, &hx, &hp);
+  ExpectJacobianNear(dfdp, fdp, hp, names, "subset");
+  // Every chosen column is really non-zero somewhere (else the test is void).
+  for (int k = 0; k < dfdp.cols(); ++k) {
+    EXPECT_GT(dfdp.col(k).cwiseAbs().maxCoeff(), 0.0) << names[k];
+  }
+}
+
+// The 12 unknown base parameters alone (the usual estimation set).
+TEST(ModelJacobianTest, UnknownBaseParametersMatchCentralDifferences) {
+  const Vehicle v = Reference();
+  const Eigen::VectorXd theta = v.parameters.Values();
+  std::vector<int> indices;
+  std::vector<std::string> names;
+  for (int i = kAlpha; i < kNumBaseParameters; ++i) {
+    indices.push_back(i);
+    names.push_back(BaseParameterName(i));
+  }
+  for (const Case& c : NearHoverCases(4004u, 3)) {
+    Eigen::MatrixXd dfdx, dfdp, fdx, fdp;
+    std::vector<double> hx, hp;
+    ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), c.input, indices, &dfdx, &dfdp));
+    FiniteDifferences(v, theta, c.x, c.input, indices, &fdx, &fdp, &hx, &hp);
+    ExpectJacobianNear(dfdp, fdp, hp, names, "unknowns");
+  }
+}
+
+// A non-finite derivative (zero inertia) is reported, not returned.
+TEST(ModelJacobianTest, ReportsNonFiniteDerivatives) {
+  const Vehicle v = Reference();
+  Eigen::VectorXd theta = v.parameters.Values();
+  theta[kIxx] = 0.0;
+  const Case c = NearHoverCases(5005u, 1)[0];
+  Eigen::MatrixXd dfdx, dfdp;
+  EXPECT_FALSE(DerivativeJacobians(v.model, theta, c.x.data(), c.input, {kAlpha}, &dfdx, &dfdp));
+}
+
+}  // namespace
+}  // namespace coaxid

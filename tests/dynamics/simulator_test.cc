@@ -1,0 +1,133 @@
+// The simulator on the real vehicle model: CVODE against an independent
+// fixed-step RK4, and CVODES sensitivities against finite differences of
+// whole simulations.
+#include "dynamics/simulator.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "dynamics/rk4.h"
+#include "dynamics/trim.h"
+#include "dynamics/vehicle.h"
+#include "experiments/simulate_experiment.h"
+
+namespace coaxid {
+namespace {
+
+// A logged closed-loop flight with every effect on, so the replay exercises
+// the whole model; its inputs are replayed open loop for 1 s (the open-loop
+// hover diverges slowly enough over 1 s to stay near hover).
+struct Fixture {
+  Vehicle vehicle;
+  InputHold inputs;
+  Eigen::VectorXd x0;
+};
+
+Fixture MakeFixture() {
+  Fixture f;
+  VehicleConfig config = LoadVehicleConfig(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
+  for (const EffectInfo& info : EffectLibrary()) {
+    std::map<std::string, ParameterOverride> overrides;
+    for (const auto& p : info.parameters) overrides[p.name].value = p.typical;
+    config.effects.emplace_back(info.name, overrides);
+  }
+  f.vehicle = MakeVehicle(config);
+  FlightScenario scenario;
+  scenario.duration_s = 3;
+  scenario.excitation.start_s = 0.5;
+  const Log log = SimulateFlight(f.vehicle, scenario, 7);
+  f.inputs = InputHold::FromLog(log);
+  f.x0 = TrimHover(f.vehicle.model, f.vehicle.parameters.Values(), 1.5).state;
+  f.x0[kU] = 0.1;  // some motion so every term of the model is active
+  f.x0[kQ] = 0.05;
+  return f;
+}
+
+TEST(Simulator, AgreesWithIndependentRk4) {
+  const Fixture f = MakeFixture();
+  IntegratorOptions tight;
+  tight.relative_tolerance = 1e-10;
+  tight.absolute_tolerance = 1e-12;
+  Simulator simulator(f.vehicle.model, f.vehicle.parameters.Values(), tight);
+  const int last = 400;  // 2 s at 200 Hz
+  Trajectory trajectory;
+  ASSERT_TRUE(simulator.Run(f.inputs, 100, last, f.x0, &trajectory)) << simulator.last_error();
+
+  VehicleOde ode(f.vehicle.model, f.vehicle.parameters.Values());
+  Eigen::VectorXd x = f.x0;
+  for (int k = 100; k < last; ++k) {
+    ode.SetInput(f.inputs.input(k));
+    // 50 RK4 steps of 0.1 ms per 5 ms hold: error ~ h^4 * |f''''| is far
+    // below 1e-9 for this smooth model.
+    ASSERT_TRUE(IntegrateRk4(ode, f.inputs.time(k), f.inputs.time(k + 1), 50, &x));
+    const Eigen::VectorXd& cvode = trajectory.states[k + 1 - 100];
+    for (int i = 0; i < kNumStates; ++i) {
+      // Both integrators are accurate to ~1e-9 here; 1e-7 leaves margin for
+      // the error growth of the unstable hover over 2 s.
+      ASSERT_NEAR(cvode[i], x[i], 1e-7 * (1 + std::fabs(x[i])))
+          << "state " << StateName(i) << " at t = " << f.inputs.time(k + 1);
+    }
+  }
+}
+
+TEST(Simulator, SensitivitiesEqualFiniteDifferencesOfWholeSimulations) {
+  const Fixture f = MakeFixture();
+  const Eigen::VectorXd theta = f.vehicle.parameters.Values();
+  // Every parameter of the vehicle (known ones too: the equations allow it).
+  std::vector<int> params;
+  for (int i = 0; i < theta.size(); ++i) params.push_back(i);
+  IntegratorOptions options;
+  options.relative_tolerance = 1e-10;
+  options.absolute_tolerance = 1e-12;
+  Simulator simulator(f.vehicle.model, theta, options, {true, true}, params);
+  const int first = 100, last = 300;  // 1 s
+  Trajectory trajectory;
+  ASSERT_TRUE(simulator.Run(f.inputs, first, last, f.x0, &trajectory)) << simulator.last_error();
+  const Eigen::MatrixXd& S = trajectory.sensitivities.back();
+  ASSERT_EQ(S.cols(), kNumStates + static_cast<int>(params.size()));
+
+  Simulator plain(f.vehicle.model, theta, options);
+  auto final_state = [&](const Eigen::VectorXd& th, const Eigen::VectorXd& x0) {
+    plain.SetTheta(th);
+    Trajectory t;
+    EXPECT_TRUE(plain.Run(f.inputs, first, last, x0, &t));
+    return t.states.back();
+  };
+  const int columns = S.cols();
+  for (int c = 0; c < columns; ++c) {
+    Eigen::VectorXd th = theta, x0 = f.x0;
+    double* target = c < kNumStates ? &x0[c] : &th[params[c - kNumStates]];
+    // Central differences with a step of 1e-5 of the coordinate's scale (the
+    // parameter's own scale, 1 for states): truncation error ~1e-10 relative,
+    // round-off ~ tol/step ~ 1e-7 relative.
+    const double h =
+        1e-5 * (c < kNumStates ? 1.0 : f.vehicle.parameters[params[c - kNumStates]].scale);
+    const double saved = *target;
+    *target = saved + h;
+    const Eigen::VectorXd plus = final_state(th, x0);
+    *target = saved - h;
+    const Eigen::VectorXd minus = final_state(th, x0);
+    const Eigen::VectorXd fd = (plus - minus) / (2 * h);
+    const double scale = std::max(fd.norm(), S.col(c).norm());
+    if (scale < 1e-12) continue;  // this direction does not move the state at all
+    EXPECT_LT((fd - S.col(c)).norm(), 1e-4 * scale)
+        << "column " << c
+        << (c < kNumStates ? std::string(" x0.") + StateName(c)
+                           : " " + f.vehicle.parameters[params[c - kNumStates]].name)
+        << "\nFD:   " << fd.transpose() << "\nCVODES: " << S.col(c).transpose();
+  }
+}
+
+TEST(Simulator, ReportsBlownUpParametersInsteadOfCrashing) {
+  const Fixture f = MakeFixture();
+  Eigen::VectorXd theta = f.vehicle.parameters.Values();
+  theta[kIxx] = 1e-30;  // a wild trial step of an optimiser
+  Simulator simulator(f.vehicle.model, theta);
+  Trajectory trajectory;
+  EXPECT_FALSE(simulator.Run(f.inputs, 100, 600, f.x0, &trajectory));
+  EXPECT_FALSE(simulator.last_error().empty());
+}
+
+}  // namespace
+}  // namespace coaxid
