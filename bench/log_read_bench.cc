@@ -30,10 +30,9 @@ std::string g_full_path;
 
 // A 200 Hz flight: t, the 4 inputs, the 12 states and the 3 accelerometer axes.
 Log MakeFlightLog(bool quantize) {
-  const std::vector<std::string> names = {"omega1", "omega2", "delta_cx", "delta_cy", "x",
-                                          "y",      "z",      "u",        "v",        "w",
-                                          "phi",    "theta",  "psi",      "p",        "q",
-                                          "r",      "ax",     "ay",       "az"};
+  const std::vector<std::string> names = {
+      "omega1", "omega2", "delta_cx", "delta_cy", "x", "y", "z",  "u",  "v", "w",
+      "phi",    "theta",  "psi",      "p",        "q", "r", "ax", "ay", "az"};
   Log log;
   log.kind = LogKind::kFlight;
   log.metadata = {{"vehicle", "bench"}, {"rate_hz", "200"}};
@@ -54,8 +53,8 @@ Log MakeFlightLog(bool quantize) {
 
 std::string WriteTempLog(const char* tag, bool quantize) {
   const char* tmpdir = std::getenv("TMPDIR");
-  const std::string path = std::string(tmpdir != nullptr ? tmpdir : "/tmp") +
-                           "/coaxid_bench_" + tag + "_" + std::to_string(::getpid()) + ".csv";
+  const std::string path = std::string(tmpdir != nullptr ? tmpdir : "/tmp") + "/coaxid_bench_" +
+                           tag + "_" + std::to_string(::getpid()) + ".csv";
   WriteLog(path, MakeFlightLog(quantize));
   return path;
 }

@@ -3,7 +3,6 @@
 #include <glog/logging.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -198,8 +197,8 @@ class Parser {
     const int number = reader_.number();
     if (key == "kind") {
       if (kind_line_ != 0) {
-        Fail(source_, number,
-             "", "second '# kind:' line (first on line " + std::to_string(kind_line_) + ")");
+        Fail(source_, number, "",
+             "second '# kind:' line (first on line " + std::to_string(kind_line_) + ")");
       }
       if (value == "balance") {
         log_.kind = LogKind::kBalance;
@@ -232,8 +231,8 @@ class Parser {
           Trim(header.substr(start, comma == std::string_view::npos ? comma : comma - start));
       if (name.empty()) {
         Fail(source_, line, "",
-             "empty column name in the header (column " +
-                 std::to_string(log_.columns.size() + 1) + ")");
+             "empty column name in the header (column " + std::to_string(log_.columns.size() + 1) +
+                 ")");
       }
       const int previous = log_.ColumnIndex(std::string(name));
       if (previous >= 0) {
@@ -355,9 +354,7 @@ class Parser {
   // is an ordinary rounding to a tiny number (strtod gives it), overflow is infinity.
   double ParseOutOfRange(const char* field, const char* end, size_t column) {
     const std::string text(Trim(FieldText(field, end)));
-    errno = 0;
-    char* stop = nullptr;
-    const double value = std::strtod(text.c_str(), &stop);
+    const double value = std::strtod(text.c_str(), nullptr);
     if (std::isinf(value)) {
       Fail(source_, reader_.number(), log_.columns[column],
            "value " + Quote(text) + " is out of range (not finite)");
@@ -462,11 +459,9 @@ void Log::SetColumn(const std::string& column, std::vector<double> data) {
 }
 
 const std::vector<std::string>& RequiredColumns(LogKind kind) {
-  static const std::vector<std::string> balance = {"t", "omega1", "omega2", "delta_cx",
-                                                   "delta_cy"};
-  static const std::vector<std::string> flight = {"t",   "omega1", "omega2", "delta_cx",
-                                                  "delta_cy", "phi", "theta", "psi",
-                                                  "p",   "q",      "r"};
+  static const std::vector<std::string> balance = {"t", "omega1", "omega2", "delta_cx", "delta_cy"};
+  static const std::vector<std::string> flight = {
+      "t", "omega1", "omega2", "delta_cx", "delta_cy", "phi", "theta", "psi", "p", "q", "r"};
   return kind == LogKind::kBalance ? balance : flight;
 }
 
@@ -477,9 +472,8 @@ const std::vector<std::string>& BalanceLoadColumns() {
 }
 
 const std::vector<std::string>& FlightOutputColumns() {
-  static const std::vector<std::string> columns = {"x",   "y",     "z",   "u",  "v",
-                                                   "w",   "phi",   "theta", "psi", "p",
-                                                   "q",   "r",     "ax",  "ay", "az"};
+  static const std::vector<std::string> columns = {"x",   "y", "z", "u", "v",  "w",  "phi", "theta",
+                                                   "psi", "p", "q", "r", "ax", "ay", "az"};
   return columns;
 }
 
@@ -530,6 +524,11 @@ void WriteLog(const std::string& path, const Log& log) {
     if (log.columns[j][0] == '#') {
       throw InputError(path + ": column name " + Quote(log.columns[j]) +
                        " cannot be written (starts with '#')");
+    }
+    for (size_t i = 0; i < j; ++i) {
+      if (log.columns[i] == log.columns[j]) {
+        throw InputError(path + ": column name " + Quote(log.columns[j]) + " appears twice");
+      }
     }
     if (j > 0) out += ',';
     out += log.columns[j];

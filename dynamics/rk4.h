@@ -5,8 +5,9 @@
 //   k4 = f(t + h, x + h k3),  x <- x + h/6 (k1 + 2 k2 + 2 k3 + k4).
 #pragma once
 
-#include <Eigen/Core>
 #include <glog/logging.h>
+
+#include <Eigen/Core>
 
 #include "dynamics/ode_system.h"
 

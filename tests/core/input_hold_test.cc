@@ -39,7 +39,7 @@ TEST(InputHoldTest, OutsideTheSamples) {
   const InputHold hold = ThreeSamples();
   EXPECT_EQ(hold.IntervalAt(-1.0), 0);  // Before the first sample: the first input.
   EXPECT_EQ(hold.IntervalAt(std::nextafter(0.0, -kInf)), 0);
-  EXPECT_EQ(hold.IntervalAt(1e9), 2);   // The last sample holds for ever.
+  EXPECT_EQ(hold.IntervalAt(1e9), 2);  // The last sample holds for ever.
   EXPECT_EQ(hold.IntervalAt(kInf), 2);
   EXPECT_EQ(hold.IntervalAt(-kInf), 0);
 }
@@ -81,10 +81,10 @@ TEST(InputHoldTest, MatchesLinearSearchOnRandomTimes) {
 }
 
 TEST(InputHoldTest, RefusesBadSamples) {
-  EXPECT_THROW(InputHold({0.0, 1.0}, {InputVector{}}), InputError);               // Sizes.
+  EXPECT_THROW(InputHold({0.0, 1.0}, {InputVector{}}), InputError);                   // Sizes.
   EXPECT_THROW(InputHold({0.0, 1.0, 1.0}, std::vector<InputVector>(3)), InputError);  // Repeat.
   EXPECT_THROW(InputHold({0.0, 2.0, 1.0}, std::vector<InputVector>(3)), InputError);  // Back.
-  EXPECT_THROW(InputHold({}, {}), InputError);                                    // Empty.
+  EXPECT_THROW(InputHold({}, {}), InputError);                                        // Empty.
   EXPECT_THROW(InputHold({0.0, std::nan("")}, std::vector<InputVector>(2)), InputError);
   EXPECT_THROW(InputHold({0.0}, {InputVector{1, kInf, 0, 0}}), InputError);
 }

@@ -11,12 +11,19 @@
 #include <algorithm>
 #include <cerrno>
 #include <cfloat>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <ostream>
+#include <random>
 #include <string>
+#include <system_error>
+#include <utility>
 #include <vector>
 
 #include "core/atomic_file.h"
@@ -30,18 +37,32 @@ using ::testing::StartsWith;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// A fresh, empty folder per test, so tests can list what a write left behind.
-std::string MakeTempDir() {
-  std::string pattern = ::testing::TempDir() + "coaxid_log_test_XXXXXX";
-  std::vector<char> buffer(pattern.begin(), pattern.end());
-  buffer.push_back('\0');
-  const char* dir = ::mkdtemp(buffer.data());
-  if (dir == nullptr) {
-    ADD_FAILURE() << "mkdtemp failed: " << std::strerror(errno);
-    return "/nonexistent";
+// A fresh, empty folder per test, so tests can list what a write left behind;
+// removed with its contents at the end of the test.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = ::testing::TempDir() + "coaxid_log_test_XXXXXX";
+    std::vector<char> buffer(pattern.begin(), pattern.end());
+    buffer.push_back('\0');
+    if (::mkdtemp(buffer.data()) == nullptr) {
+      ADD_FAILURE() << "mkdtemp failed: " << std::strerror(errno);
+      path_ = "/nonexistent";
+    } else {
+      path_ = buffer.data();
+    }
   }
-  return dir;
-}
+  ~TempDir() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
 
 std::vector<std::string> ListDir(const std::string& dir) {
   std::vector<std::string> names;
@@ -68,12 +89,11 @@ const char kFlightHeader[] = "t,omega1,omega2,delta_cx,delta_cy,phi,theta,psi,p,
 
 // One valid flight row at time `t`, with some fields replaced by raw text.
 std::string FlightRow(const std::string& t, const std::map<std::string, std::string>& raw = {}) {
-  const std::vector<std::string> names = {"t",   "omega1", "omega2", "delta_cx",
-                                          "delta_cy", "phi", "theta", "psi",
-                                          "p",   "q",      "r",      "x"};
-  const std::vector<std::string> values = {t,       "150.2", "164.9",  "0.0012",
+  const std::vector<std::string> names = {
+      "t", "omega1", "omega2", "delta_cx", "delta_cy", "phi", "theta", "psi", "p", "q", "r", "x"};
+  const std::vector<std::string> values = {t,         "150.2",  "164.9",  "0.0012",
                                            "-0.0031", "0.0011", "-0.002", "0",
-                                           "0.004",  "-0.01", "0.001",  "1.5"};
+                                           "0.004",   "-0.01",  "0.001",  "1.5"};
   std::string row;
   for (size_t j = 0; j < names.size(); ++j) {
     if (j > 0) row += ',';
@@ -112,8 +132,8 @@ TEST(LogTest, ParsesSpecExample) {
       "example.csv");
   EXPECT_EQ(log.kind, LogKind::kFlight);
   EXPECT_EQ(log.source, "example.csv");
-  EXPECT_EQ(log.metadata, (std::map<std::string, std::string>{{"vehicle", "glmav"},
-                                                              {"rate_hz", "200"}}));
+  EXPECT_EQ(log.metadata,
+            (std::map<std::string, std::string>{{"vehicle", "glmav"}, {"rate_hz", "200"}}));
   ASSERT_EQ(log.columns.size(), 14u);
   EXPECT_EQ(log.columns[0], "t");
   EXPECT_EQ(log.columns[13], "z");
@@ -189,12 +209,86 @@ TEST(LogTest, AcceptsLastLineWithoutNewline) {
   EXPECT_EQ(log.NumRows(), 2);
 }
 
+TEST(LogTest, NumberForms) {
+  const std::vector<std::pair<std::string, double>> forms = {
+      {"-0", -0.0},
+      {"5.", 5.0},
+      {".5", 0.5},
+      {"+.5", 0.5},
+      {"1E3", 1e3},
+      {"1e+3", 1e3},
+      {"-2.5e-3", -2.5e-3},
+      {"007", 7.0},
+      {"1e22", 1e22},
+      {"1e23", 1e23},
+      {"9007199254740993", 9007199254740993.0},
+      {"0.000000000000000000000000000001", 1e-30}};
+  std::string text = "# kind: balance\nt,omega1,omega2,delta_cx,delta_cy,Z\n";
+  for (size_t k = 0; k < forms.size(); ++k)
+    text += std::to_string(k) + ",1,1,0,0," + forms[k].first + "\n";
+  const Log log = ParseLog(text, "forms.csv");
+  for (size_t k = 0; k < forms.size(); ++k) {
+    EXPECT_TRUE(SameDouble(log.Column("Z")[k], forms[k].second)) << forms[k].first;
+  }
+}
+
+// The reader has a fast path for short decimals and uses from_chars for the
+// rest; both must give strtod's correctly rounded double, bit for bit.
+TEST(LogTest, NumbersMatchStrtodBitForBit) {
+  std::mt19937_64 rng(20240601);  // Seeded: a failure is repeatable.
+  std::uniform_int_distribution<int> int_digits(0, 10), fraction_digits(0, 14), digit(0, 9);
+  std::uniform_int_distribution<int> exponent(-40, 40), coin(0, 3);
+  std::vector<std::string> numbers;
+  for (int i = 0; i < 100000; ++i) {
+    std::string s = coin(rng) == 0 ? "-" : "";
+    const int n_int = int_digits(rng), n_fraction = fraction_digits(rng);
+    for (int d = 0; d < n_int; ++d) s += static_cast<char>('0' + digit(rng));
+    if (n_int == 0 || n_fraction > 0) {
+      s += '.';
+      for (int d = 0; d < std::max(n_fraction, n_int == 0 ? 1 : 0); ++d) {
+        s += static_cast<char>('0' + digit(rng));
+      }
+    }
+    if (coin(rng) == 0) s += "e" + std::to_string(exponent(rng));
+    numbers.push_back(s);
+    // And the shortest form of a random finite double of any magnitude, as WriteLog writes.
+    double v;
+    do {
+      const uint64_t bits = rng();
+      std::memcpy(&v, &bits, sizeof(v));
+    } while (!std::isfinite(v));
+    char buffer[32];
+    numbers.emplace_back(buffer, std::to_chars(buffer, buffer + sizeof(buffer), v).ptr);
+  }
+  // Around 2^53, where the fast path must hand over to from_chars.
+  for (const char* s :
+       {"9007199254740992", "9007199254740993", "9007199254740995e-3", "900719925474099.3",
+        "4503599627370497.5", "1.7976931348623157e308", "4.9e-324", "2.2250738585072011e-308"}) {
+    numbers.push_back(s);
+  }
+  std::string text = "# kind: balance\nt,omega1,omega2,delta_cx,delta_cy,Z\n";
+  for (size_t k = 0; k < numbers.size(); ++k) {
+    text += std::to_string(k) + ",1,1,0,0," + numbers[k] + "\n";
+  }
+  const Log log = ParseLog(text, "numbers.csv");
+  const std::vector<double>& z = log.Column("Z");
+  ASSERT_EQ(z.size(), numbers.size());
+  int mismatches = 0;
+  for (size_t k = 0; k < numbers.size(); ++k) {
+    const double expected = std::strtod(numbers[k].c_str(), nullptr);
+    if (!SameDouble(z[k], expected) && ++mismatches <= 10) {
+      ADD_FAILURE() << numbers[k] << ": read " << z[k] << ", strtod " << expected;
+    }
+  }
+  EXPECT_EQ(mismatches, 0);
+}
+
 struct BadCase {
   const char* name;
   std::string text;
   int line;
-  std::string column;                // "" where no column applies.
-  std::vector<std::string> words;    // What the message must say about the problem.
+  std::string column;              // "" where no column applies.
+  std::vector<std::string> words;  // What the message must say about the problem.
 };
 
 // Names the case in failure output instead of dumping the struct's bytes.
@@ -222,61 +316,175 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"EmptyFile", "", 1, "", {"empty file"}},
         BadCase{"OnlyBlankLines", "\n  \n", 1, "", {"empty file"}},
         BadCase{"NoHeader", "# kind: flight\n# vehicle: a\n", 2, "", {"no header"}},
-        BadCase{"NoKind", std::string(kFlightHeader) + "\n" + FlightRow("0") + "\n", 1, "",
+        BadCase{"NoKind",
+                std::string(kFlightHeader) + "\n" + FlightRow("0") + "\n",
+                1,
+                "",
                 {kKindWords}},
         BadCase{"UnknownKind",
-                "# vehicle: a\n# kind: hover\n" + std::string(kFlightHeader) + "\n", 2, "",
+                "# vehicle: a\n# kind: hover\n" + std::string(kFlightHeader) + "\n",
+                2,
+                "",
                 {kKindWords, "'hover'"}},
         BadCase{"SecondKind", "# kind: flight\n# kind: balance\n", 2, "", {"second", "line 1"}},
-        BadCase{"RepeatedMetadataKey", "# kind: flight\n# rate_hz: 1\n# rate_hz: 2\n", 3, "",
+        BadCase{"RepeatedMetadataKey",
+                "# kind: flight\n# rate_hz: 1\n# rate_hz: 2\n",
+                3,
+                "",
                 {"'rate_hz'", "repeated", "line 2"}},
         BadCase{"MissingRequiredColumn",
-                "# kind: flight\nt,omega1,omega2,delta_cx,delta_cy,phi,theta,psi,p,r\n", 2, "q",
+                "# kind: flight\nt,omega1,omega2,delta_cx,delta_cy,phi,theta,psi,p,r\n",
+                2,
+                "q",
                 {"missing required column"}},
-        BadCase{"MissingRequiredBalanceColumn", "# kind: balance\nt,omega1,omega2,delta_cx,Z\n",
-                2, "delta_cy", {"missing required column"}},
+        BadCase{"MissingRequiredBalanceColumn",
+                "# kind: balance\nt,omega1,omega2,delta_cx,Z\n",
+                2,
+                "delta_cy",
+                {"missing required column"}},
         BadCase{"BalanceWithoutLoadColumn",
-                "# kind: balance\nt,omega1,omega2,delta_cx,delta_cy,temp\n0,1,1,0,0,20\n", 2, "",
+                "# kind: balance\nt,omega1,omega2,delta_cx,delta_cy,temp\n0,1,1,0,0,20\n",
+                2,
+                "",
                 {"no load column", "Z1", "N2"}},
-        BadCase{"DuplicatedColumn", "# kind: flight\n" + std::string(kFlightHeader) + ",p\n", 2,
-                "p", {"duplicated", "columns 9 and 13"}},
-        BadCase{"EmptyColumnName", "# kind: flight\n" + std::string(kFlightHeader) + ",\n", 2,
-                "", {"empty column name"}},
+        BadCase{"DuplicatedColumn",
+                "# kind: flight\n" + std::string(kFlightHeader) + ",p\n",
+                2,
+                "p",
+                {"duplicated", "columns 9 and 13"}},
+        BadCase{"EmptyColumnName",
+                "# kind: flight\n" + std::string(kFlightHeader) + ",\n",
+                2,
+                "",
+                {"empty column name"}},
         BadCase{"HeaderOnly", FlightLog({}), 2, "", {"no data rows"}},
-        BadCase{"NonNumericField", FlightLog({FlightRow("0"), FlightRow("1", {{"p", "abc"}})}), 4,
-                "p", {"'abc'", "not a number"}},
-        BadCase{"TwoDecimalPoints", FlightLog({FlightRow("0", {{"omega1", "1.5.3"}})}), 3,
-                "omega1", {"'1.5.3'", "not a number"}},
-        BadCase{"HexNumber", FlightLog({FlightRow("0", {{"x", "0x10"}})}), 3, "x",
+        BadCase{"NonNumericField",
+                FlightLog({FlightRow("0"), FlightRow("1", {{"p", "abc"}})}),
+                4,
+                "p",
+                {"'abc'", "not a number"}},
+        BadCase{"TwoDecimalPoints",
+                FlightLog({FlightRow("0", {{"omega1", "1.5.3"}})}),
+                3,
+                "omega1",
+                {"'1.5.3'", "not a number"}},
+        BadCase{"HexNumber",
+                FlightLog({FlightRow("0", {{"x", "0x10"}})}),
+                3,
+                "x",
                 {"'0x10'", "not a number"}},
-        BadCase{"NumberWithUnit", FlightLog({FlightRow("0", {{"x", "1.5 m"}})}), 3, "x",
+        BadCase{"NumberWithUnit",
+                FlightLog({FlightRow("0", {{"x", "1.5 m"}})}),
+                3,
+                "x",
                 {"'1.5 m'", "not a number"}},
-        BadCase{"InfinityInOptionalColumn", FlightLog({FlightRow("0", {{"x", "inf"}})}), 3, "x",
+        BadCase{"InfinityInOptionalColumn",
+                FlightLog({FlightRow("0", {{"x", "inf"}})}),
+                3,
+                "x",
                 {"'inf'", "not finite"}},
-        BadCase{"OverflowInOptionalColumn", FlightLog({FlightRow("0", {{"x", "-1e999"}})}), 3,
-                "x", {"'-1e999'", "not finite"}},
+        BadCase{"OverflowInOptionalColumn",
+                FlightLog({FlightRow("0", {{"x", "-1e999"}})}),
+                3,
+                "x",
+                {"'-1e999'", "not finite"}},
         BadCase{"NaNInRequiredColumn",
-                FlightLog({FlightRow("0"), FlightRow("1"), FlightRow("2", {{"theta", "nan"}})}), 5,
-                "theta", {"'nan'", "not finite", "required"}},
+                FlightLog({FlightRow("0"), FlightRow("1"), FlightRow("2", {{"theta", "nan"}})}),
+                5,
+                "theta",
+                {"'nan'", "not finite", "required"}},
         BadCase{"NaNTime", FlightLog({FlightRow("nan")}), 3, "t", {"not finite", "required"}},
-        BadCase{"EmptyFieldInRequiredColumn", FlightLog({FlightRow("0", {{"omega2", ""}})}), 3,
-                "omega2", {"missing", "required"}},
-        BadCase{"RepeatedTime", FlightLog({FlightRow("0"), FlightRow("0.01"), FlightRow("0.01")}),
-                5, "t", {"0.01 is not after the previous time 0.01", "line 4", "increasing"}},
-        BadCase{"DecreasingTime", FlightLog({FlightRow("0.5"), FlightRow("0.25")}), 4, "t",
+        BadCase{"EmptyFieldInRequiredColumn",
+                FlightLog({FlightRow("0", {{"omega2", ""}})}),
+                3,
+                "omega2",
+                {"missing", "required"}},
+        BadCase{"RepeatedTime",
+                FlightLog({FlightRow("0"), FlightRow("0.01"), FlightRow("0.01")}),
+                5,
+                "t",
+                {"0.01 is not after the previous time 0.01", "line 4", "increasing"}},
+        BadCase{"DecreasingTime",
+                FlightLog({FlightRow("0.5"), FlightRow("0.25")}),
+                4,
+                "t",
                 {"time 0.25", "previous time 0.5", "increasing"}},
-        BadCase{"TooFewFields", FlightLog({FlightRow("0"), "1,150,160"}), 4, "",
+        BadCase{"TooFewFields",
+                FlightLog({FlightRow("0"), "1,150,160"}),
+                4,
+                "",
                 {"row has 3 fields", "header has 12"}},
-        BadCase{"TooManyFields", FlightLog({FlightRow("0") + ",7"}), 3, "",
+        BadCase{"TooManyFields",
+                FlightLog({FlightRow("0") + ",7"}),
+                3,
+                "",
                 {"row has 13 fields", "header has 12"}},
-        BadCase{"DataAfterBlankLine", FlightLog({FlightRow("0"), "", FlightRow("1")}), 5, "",
+        BadCase{"DataAfterBlankLine",
+                FlightLog({FlightRow("0"), "", FlightRow("1")}),
+                5,
+                "",
                 {"blank line 4"}},
-        BadCase{"MetadataAfterHeader", FlightLog({FlightRow("0"), "# rate_hz: 200"}), 4, "",
+        BadCase{"MetadataAfterHeader",
+                FlightLog({FlightRow("0"), "# rate_hz: 200"}),
+                4,
+                "",
                 {"metadata line after the header"}}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
 
+// Seeded random edits of a valid log: the reader either refuses with an
+// InputError or returns a log that keeps the format's promises; it never
+// crashes, reads out of bounds (run under ASan in the sanitizer build) or
+// throws anything else.
+TEST(LogTest, RandomEditsAreRefusedOrValid) {
+  const std::string valid = "# kind: flight\n# vehicle: v\n" +
+                            FlightLog({FlightRow("0"), FlightRow("0.5", {{"x", ""}}),
+                                       FlightRow("1", {{"p", "-1e-3"}}), FlightRow("2")})
+                                .substr(15);
+  const std::string alphabet = "0123456789.,-+eE \t\r\n#:naifx";
+  std::mt19937 rng(7);  // Seeded: a failure is repeatable.
+  std::uniform_int_distribution<int> edits(1, 4), kind(0, 2);
+  std::uniform_int_distribution<size_t> pick(0, alphabet.size() - 1);
+  int accepted = 0;
+  for (int trial = 0; trial < 5000; ++trial) {
+    std::string text = valid;
+    for (int e = edits(rng); e > 0; --e) {
+      const size_t at = std::uniform_int_distribution<size_t>(0, text.size())(rng);
+      switch (kind(rng)) {
+        case 0:
+          text.insert(at, 1, alphabet[pick(rng)]);
+          break;
+        case 1:
+          if (at < text.size()) text.erase(at, 1);
+          break;
+        default:
+          if (at < text.size()) text[at] = alphabet[pick(rng)];
+      }
+    }
+    Log log;
+    try {
+      log = ParseLog(text, "fuzz.csv");
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.what(), StartsWith("fuzz.csv:")) << text;
+      continue;
+    }
+    ++accepted;
+    ASSERT_EQ(log.values.size(), log.columns.size()) << text;
+    for (const auto& column : log.values) ASSERT_EQ(column.size(), log.values[0].size()) << text;
+    for (const std::string& name : RequiredColumns(log.kind)) {
+      ASSERT_TRUE(log.Has(name)) << text;
+      for (const double v : log.Column(name)) ASSERT_TRUE(std::isfinite(v)) << text;
+    }
+    const std::vector<double>& t = log.Column("t");
+    for (size_t k = 1; k < t.size(); ++k) ASSERT_GT(t[k], t[k - 1]) << text;
+  }
+  // Both outcomes must occur, or the edits test nothing.
+  EXPECT_GT(accepted, 100);
+  EXPECT_LT(accepted, 4900);
+}
+
 TEST(LogTest, ReadLogNamesThePathInMessages) {
-  const std::string dir = MakeTempDir();
+  const TempDir temp;
+  const std::string& dir = temp.path();
   const std::string path = dir + "/flight 7.csv";
   WriteFileAtomically(path, FlightLog({FlightRow("0"), FlightRow("1", {{"r", "x"}})}));
   try {
@@ -334,7 +542,8 @@ Log TrickyLog() {
 }
 
 TEST(LogTest, WriteThenReadIsExact) {
-  const std::string dir = MakeTempDir();
+  const TempDir temp;
+  const std::string& dir = temp.path();
   const std::string path = dir + "/log.csv";
   const Log written = TrickyLog();
   WriteLog(path, written);
@@ -359,7 +568,8 @@ TEST(LogTest, WriteThenReadIsExact) {
 }
 
 TEST(LogTest, WritesKindFirstShortestNumbersAndEmptyNaN) {
-  const std::string dir = MakeTempDir();
+  const TempDir temp;
+  const std::string& dir = temp.path();
   Log log;
   log.kind = LogKind::kBalance;
   log.metadata = {{"vehicle", "glmav"}};
@@ -371,7 +581,8 @@ TEST(LogTest, WritesKindFirstShortestNumbersAndEmptyNaN) {
 }
 
 TEST(LogTest, WriteRefusesWhatWouldNotReadBack) {
-  const std::string dir = MakeTempDir();
+  const TempDir temp;
+  const std::string& dir = temp.path();
   const std::string path = dir + "/w.csv";
   Log log;
   log.SetColumn("t", {0, 1});
@@ -386,6 +597,10 @@ TEST(LogTest, WriteRefusesWhatWouldNotReadBack) {
   Log bad_name;
   bad_name.SetColumn("a,b", {1});
   EXPECT_THROW(WriteLog(path, bad_name), InputError);
+  Log twice;
+  twice.columns = {"t", "t"};
+  twice.values = {{1}, {2}};
+  EXPECT_THROW(WriteLog(path, twice), InputError);
   Log bad_key;
   bad_key.SetColumn("t", {1});
   bad_key.metadata["kind"] = "flight";
@@ -398,7 +613,8 @@ TEST(LogTest, WriteRefusesWhatWouldNotReadBack) {
 }
 
 TEST(LogTest, WriteIntoMissingFolderNamesThePath) {
-  const std::string path = MakeTempDir() + "/no/such/folder/log.csv";
+  const TempDir temp;
+  const std::string path = temp.path() + "/no/such/folder/log.csv";
   try {
     WriteLog(path, TrickyLog());
     FAIL() << "no InputError";
@@ -436,7 +652,8 @@ TEST(LogTest, NamesOfKindsAndColumnSets) {
 }
 
 TEST(AtomicFileTest, ReplacesContentsAndLeavesNoTemporary) {
-  const std::string dir = MakeTempDir();
+  const TempDir temp;
+  const std::string& dir = temp.path();
   const std::string path = dir + "/out.txt";
   WriteFileAtomically(path, "first, longer contents\n");
   WriteFileAtomically(path, "second\n");
@@ -450,7 +667,8 @@ TEST(AtomicFileTest, ReplacesContentsAndLeavesNoTemporary) {
 }
 
 TEST(AtomicFileTest, FailedRenameRemovesTemporary) {
-  const std::string dir = MakeTempDir();
+  const TempDir temp;
+  const std::string& dir = temp.path();
   const std::string target = dir + "/taken";
   ASSERT_EQ(::mkdir(target.c_str(), 0755), 0);  // rename(file, directory) fails.
   try {
@@ -463,7 +681,8 @@ TEST(AtomicFileTest, FailedRenameRemovesTemporary) {
 }
 
 TEST(AtomicFileTest, ReadFileErrorsNameThePath) {
-  const std::string dir = MakeTempDir();
+  const TempDir temp;
+  const std::string& dir = temp.path();
   EXPECT_THROW(ReadFile(dir + "/absent"), InputError);
   try {
     ReadFile(dir);

@@ -1,30 +1,33 @@
-// Tests of the CVODES integrator (dynamics/integrator.h) and the RK4 reference
-// (dynamics/rk4.h) on systems with closed-form solutions and sensitivities.
+// Tests of the CVODES integrator (dynamics/integrator.h) and the RK4 reference (dynamics/rk4.h)
+// on systems with closed-form solutions and sensitivities.
 //
-// Tolerances. CVODE keeps the estimated local error of every step below the
-// local tolerance tol = rtol*|x| + atol. Over one uninterrupted run of a
-// stable, non-stiff problem across a few time constants the global error is a
-// small multiple of that: we allow kGlobalErrorFactor = 20 tol (observed
-// 0.02-3.5 tol over the four method/iteration combinations, so the bound keeps
-// a margin of about 6 and still catches an error that is off by an order of
-// magnitude). Restarting costs accuracy: each restart
-// begins again with low-order steps, each of whose local errors may reach tol,
-// and for a smooth system they have a consistent sign, so they add up linearly
-// with the number of restarts. For restarted runs we therefore allow one more
-// tol per restart (observed 0.02-0.3 tol per restart with 5-10 ms intervals). Every bound states the scale |x| (or |S|) it uses.
-// Sensitivities are in the error test (CVodeSetSensErrCon) with the state's
-// tolerances (CVodeSensEEtolerances), so the same rules apply with |S|.
+// Tolerances. CVODE keeps the estimated local error of every step below the local tolerance
+// tol = rtol*|x| + atol. Over one uninterrupted run of a stable, non-stiff problem across a few
+// time constants the global error is a small multiple of that: we allow kGlobalErrorFactor = 20
+// tol (observed 0.02-3.5 tol over the four method/iteration combinations, so the bound keeps a
+// margin of about 6 and still catches an error off by an order of magnitude).
+// Restarting costs accuracy: each restart begins again with low-order steps, each of whose local
+// errors may reach tol, and for a smooth system they have a consistent sign, so they add up
+// linearly with the number of restarts. For restarted runs we therefore allow one more tol per
+// restart (observed 0.02-0.3 tol per restart with 5-10 ms intervals).
+// Every bound states the scale |x| (or |S|) it uses. Sensitivities are in the error test
+// (CVodeSetSensErrCon) with the state's tolerances (CVodeSensEEtolerances), so the same rules
+// apply to them with |S| as the scale.
+
+#include "dynamics/integrator.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
+#include <unsupported/Eigen/MatrixFunctions>
+#include <utility>
 #include <vector>
 
-#include <Eigen/Core>
-#include <gtest/gtest.h>
-#include <unsupported/Eigen/MatrixFunctions>
-
 #include "core/errors.h"
-#include "dynamics/integrator.h"
 #include "dynamics/ode_system.h"
 #include "dynamics/rk4.h"
 
@@ -209,7 +212,7 @@ IntegratorOptions MakeOptions(const Config& config, double rtol = 1e-7, double a
   return options;
 }
 
-class IntegratorTest : public ::testing::TestWithParam<Config> {};
+class IntegratorMethodTest : public ::testing::TestWithParam<Config> {};
 
 const Config kConfigs[] = {
     {"AdamsFixedPoint", IntegratorOptions::Method::kAdams, false},
@@ -217,12 +220,12 @@ const Config kConfigs[] = {
     {"AdamsNewton", IntegratorOptions::Method::kAdams, true},
     {"BdfFixedPoint", IntegratorOptions::Method::kBdf, false},
 };
-INSTANTIATE_TEST_SUITE_P(Methods, IntegratorTest, ::testing::ValuesIn(kConfigs),
+INSTANTIATE_TEST_SUITE_P(Methods, IntegratorMethodTest, ::testing::ValuesIn(kConfigs),
                          [](const ::testing::TestParamInfo<Config>& info) {
                            return std::string(info.param.name);
                          });
 
-TEST_P(IntegratorTest, OscillatorStateMatchesClosedForm) {
+TEST_P(IntegratorMethodTest, OscillatorStateMatchesClosedForm) {
   const DampedOscillator system(4.0, 0.4);
   const IntegratorOptions options = MakeOptions(GetParam());
   Integrator integrator(system, options);
@@ -233,15 +236,15 @@ TEST_P(IntegratorTest, OscillatorStateMatchesClosedForm) {
     ASSERT_TRUE(integrator.AdvanceTo(t1, &x)) << integrator.last_error();
     const Eigen::Vector2d expected = system.TransitionMatrix(t1) * x0;
     // Scale |x| <= 2 (the amplitude of (x, v) from x0 = (1, -0.5), omega ~ 2).
-    const double tol = kGlobalErrorFactor * (options.relative_tolerance * 2.0 +
-                                             options.absolute_tolerance);
+    const double tol =
+        kGlobalErrorFactor * (options.relative_tolerance * 2.0 + options.absolute_tolerance);
     EXPECT_NEAR(x[0], expected[0], tol) << "t1 = " << t1;
     EXPECT_NEAR(x[1], expected[1], tol) << "t1 = " << t1;
   }
   EXPECT_DOUBLE_EQ(integrator.time(), 10.0);
 }
 
-TEST_P(IntegratorTest, LogisticStateAndSensitivitiesMatchClosedForm) {
+TEST_P(IntegratorMethodTest, LogisticStateAndSensitivitiesMatchClosedForm) {
   const Logistic system(1.5, 2.0);
   const IntegratorOptions options = MakeOptions(GetParam());
   Integrator integrator(system, options, {true, true});
@@ -255,23 +258,23 @@ TEST_P(IntegratorTest, LogisticStateAndSensitivitiesMatchClosedForm) {
     ASSERT_EQ(S.rows(), 1);
     ASSERT_EQ(S.cols(), 3);
     // Scale: x <= K = 2.
-    EXPECT_NEAR(x[0], system.Solution(t1, x0),
-                kGlobalErrorFactor * (options.relative_tolerance * 2.0 +
-                                      options.absolute_tolerance))
+    EXPECT_NEAR(
+        x[0], system.Solution(t1, x0),
+        kGlobalErrorFactor * (options.relative_tolerance * 2.0 + options.absolute_tolerance))
         << "t1 = " << t1;
     const Eigen::RowVector3d expected = system.Sensitivities(t1, x0);
     for (int j = 0; j < 3; ++j) {
       // Scale: the largest sensitivity over the run, dx/dx0 = K^2 E / D^2 <= 5.3 (at E = 19).
       const double scale = 6.0;
-      EXPECT_NEAR(S(0, j), expected[j],
-                  kGlobalErrorFactor * (options.relative_tolerance * scale +
-                                        options.absolute_tolerance))
+      EXPECT_NEAR(
+          S(0, j), expected[j],
+          kGlobalErrorFactor * (options.relative_tolerance * scale + options.absolute_tolerance))
           << "t1 = " << t1 << ", column " << j;
     }
   }
 }
 
-TEST_P(IntegratorTest, OscillatorSensitivitiesMatchClosedFormAndFiniteDifferences) {
+TEST_P(IntegratorMethodTest, OscillatorSensitivitiesMatchClosedFormAndFiniteDifferences) {
   const double k = 4.0, c = 0.4, t1 = 5.0;
   const Eigen::Vector2d x0(1.0, -0.5);
   const DampedOscillator system(k, c);
@@ -320,7 +323,7 @@ TEST_P(IntegratorTest, OscillatorSensitivitiesMatchClosedFormAndFiniteDifference
   EXPECT_LT((S - fd).cwiseAbs().maxCoeff(), tol_closed + 1e-6);
 }
 
-TEST_P(IntegratorTest, LogisticSensitivitiesMatchFiniteDifferences) {
+TEST_P(IntegratorMethodTest, LogisticSensitivitiesMatchFiniteDifferences) {
   const double r = 1.5, K = 2.0, x0 = 0.1, t1 = 4.0;
   const IntegratorOptions options = MakeOptions(GetParam());
   const Logistic system(r, K);
@@ -348,12 +351,12 @@ TEST_P(IntegratorTest, LogisticSensitivitiesMatchFiniteDifferences) {
   const Eigen::RowVector3d exact = system.Sensitivities(t1, x0);
   EXPECT_LT((fd - exact).cwiseAbs().maxCoeff(), 1e-5 * exact.cwiseAbs().maxCoeff());
   const double scale = std::max(1.0, exact.cwiseAbs().maxCoeff());
-  EXPECT_LT((S - fd).cwiseAbs().maxCoeff(),
-            kGlobalErrorFactor * options.relative_tolerance * scale +
-                1e-5 * exact.cwiseAbs().maxCoeff());
+  EXPECT_LT(
+      (S - fd).cwiseAbs().maxCoeff(),
+      kGlobalErrorFactor * options.relative_tolerance * scale + 1e-5 * exact.cwiseAbs().maxCoeff());
 }
 
-TEST_P(IntegratorTest, ThousandRestartsMatchOneUninterruptedRun) {
+TEST_P(IntegratorMethodTest, ThousandRestartsMatchOneUninterruptedRun) {
   const double k = 4.0, c = 0.4, t_end = 10.0;
   const int kRestarts = 1000;
   const DampedOscillator system(k, c);
@@ -373,8 +376,8 @@ TEST_P(IntegratorTest, ThousandRestartsMatchOneUninterruptedRun) {
     // Interval ends from the index, so the last one lands exactly on t_end.
     const double t0 = t_end * i / kRestarts, t1 = t_end * (i + 1) / kRestarts;
     ASSERT_TRUE(restarted.Reset(t0, x, i == 0 ? nullptr : &S)) << restarted.last_error();
-    ASSERT_TRUE(restarted.AdvanceTo(t1, &x, &S)) << "interval " << i << ": "
-                                                 << restarted.last_error();
+    ASSERT_TRUE(restarted.AdvanceTo(t1, &x, &S))
+        << "interval " << i << ": " << restarted.last_error();
   }
   // Scale |x| <= 2, |S| <= 5. The uninterrupted run is within kGlobalErrorFactor tol of the
   // truth, the restarted one within RestartedBound(); they differ by at most the sum.
@@ -399,7 +402,7 @@ TEST_P(IntegratorTest, ThousandRestartsMatchOneUninterruptedRun) {
   EXPECT_GE(stats.jac_evals, kRestarts);  // Sensitivities need >= 1 Jacobian per interval.
 }
 
-TEST_P(IntegratorTest, RestartsWithoutInitialStepHintAgree) {
+TEST_P(IntegratorMethodTest, RestartsWithoutInitialStepHintAgree) {
   const DampedOscillator system(4.0, 0.4);
   const Eigen::Vector2d x0(1.0, -0.5);
   IntegratorOptions options = MakeOptions(GetParam());
@@ -422,7 +425,7 @@ TEST_P(IntegratorTest, RestartsWithoutInitialStepHintAgree) {
   EXPECT_LT((result[1] - exact).cwiseAbs().maxCoeff(), bound);
 }
 
-TEST_P(IntegratorTest, ErrorShrinksWithTolerance) {
+TEST_P(IntegratorMethodTest, ErrorShrinksWithTolerance) {
   // Tolerance proportionality: 1000x tighter tolerances give a much smaller error.
   const DampedOscillator system(4.0, 0.4);
   const Eigen::Vector2d x0(1.0, -0.5);
@@ -439,7 +442,7 @@ TEST_P(IntegratorTest, ErrorShrinksWithTolerance) {
   EXPECT_LT(errors[1], errors[0] / 30.0) << errors[0] << " " << errors[1];
 }
 
-TEST_P(IntegratorTest, StopTimeKeepsStepsBeforeInputChange) {
+TEST_P(IntegratorMethodTest, StopTimeKeepsStepsBeforeInputChange) {
   const StopTimeProbe system;
   Integrator integrator(system, MakeOptions(GetParam()));
   Eigen::VectorXd x;
@@ -450,7 +453,7 @@ TEST_P(IntegratorTest, StopTimeKeepsStepsBeforeInputChange) {
   EXPECT_NEAR(x[0], 1.0, 1e-12);
 }
 
-TEST_P(IntegratorTest, RhsReturningFalseFailsWithMessage) {
+TEST_P(IntegratorMethodTest, RhsReturningFalseFailsWithMessage) {
   for (bool with_sens : {false, true}) {
     const FailingOscillator system(0.3, FailingOscillator::Mode::kRhsFalse);
     Integrator integrator(system, MakeOptions(GetParam()), {with_sens, with_sens});
@@ -475,7 +478,7 @@ TEST_P(IntegratorTest, RhsReturningFalseFailsWithMessage) {
   }
 }
 
-TEST_P(IntegratorTest, NonFiniteRhsFailsWithMessage) {
+TEST_P(IntegratorMethodTest, NonFiniteRhsFailsWithMessage) {
   const FailingOscillator system(0.3, FailingOscillator::Mode::kRhsNan);
   Integrator integrator(system, MakeOptions(GetParam()));
   Eigen::VectorXd x;
@@ -484,7 +487,7 @@ TEST_P(IntegratorTest, NonFiniteRhsFailsWithMessage) {
   EXPECT_FALSE(integrator.last_error().empty());
 }
 
-TEST_P(IntegratorTest, JacobiansReturningFalseFailsWithMessage) {
+TEST_P(IntegratorMethodTest, JacobiansReturningFalseFailsWithMessage) {
   const FailingOscillator system(0.3, FailingOscillator::Mode::kJacobiansFalse);
   Integrator integrator(system, MakeOptions(GetParam()), {false, true});
   Eigen::VectorXd x;

@@ -710,7 +710,9 @@ TYPED_TEST(VehicleModelTest, CgOffsetChangesOnlyLAndMByTheRotorForce) {
                  setting == Setting::kFlight ? "cg_offset, flight" : "cg_offset, balance");
     // Upward thrust (Z_T < 0) ahead of G (x_g > 0) pitches the nose up.
     ASSERT_LT(Z_T, 0);
-    if (x_g > 0) EXPECT_GT(with.M[1] - without.M[1], 0);
+    if (x_g > 0) {
+      EXPECT_GT(with.M[1] - without.M[1], 0);
+    }
   }
 }
 
