@@ -52,15 +52,31 @@ void BM_ReplayOneSecond(benchmark::State& state) {
   const bool sens = state.range(0) != 0;
   std::vector<int> unknowns;
   for (int i = kAlpha; i < kNumBaseParameters; ++i) unknowns.push_back(i);
-  Simulator simulator(Reference().model, theta, {}, {sens, sens}, sens ? unknowns : std::vector<int>{});
+  IntegratorOptions options;
+  options.sensitivity_error_control = state.range(1) != 0;
+  options.relative_tolerance = 1e-6;
+  options.absolute_tolerance = 1e-8;
+  const SensitivityMethod method = state.range(2) ? SensitivityMethod::kVariationalEquations
+                                                  : SensitivityMethod::kCvodes;
+  Simulator simulator(Reference().model, theta, options, {sens, sens},
+                      sens ? unknowns : std::vector<int>{}, method);
   Trajectory trajectory;
   for (auto _ : state) {
     if (!simulator.Run(inputs, 200, 400, x0, &trajectory)) state.SkipWithError("replay failed");
     benchmark::DoNotOptimize(trajectory.states.data());
   }
-  state.SetLabel(sens ? "with sensitivities (12 x0 + 12 parameters)" : "states only");
+  state.SetLabel(std::string(sens ? "with sensitivities (12 x0 + 12 parameters)" : "states only") +
+                 (state.range(1) ? ", sensitivities in the error test" : "") +
+                 (sens ? (state.range(2) ? ", variational equations" : ", CVODES") : "") +
+                 ", rtol 1e-6");
 }
-BENCHMARK(BM_ReplayOneSecond)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ReplayOneSecond)
+    ->Args({0, 0, 0})
+    ->Args({1, 1, 0})
+    ->Args({1, 0, 0})
+    ->Args({1, 1, 1})
+    ->Args({1, 0, 1})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace coaxid

@@ -61,6 +61,7 @@ bool IntegratorOptions::IsValid(std::string* why) const {
   }
   if (relative_tolerance >= 1.0) return fail("relative_tolerance must be < 1");
   if (max_steps_per_interval <= 0) return fail("max_steps_per_interval must be > 0");
+  if (error_controlled_states < 0) return fail("error_controlled_states must be >= 0");
   const int order_limit = method == Method::kAdams ? 12 : 5;
   if (max_order < 0 || max_order > order_limit) {
     return fail("max_order must be in [0, " + std::to_string(order_limit) + "] for " +
@@ -172,8 +173,21 @@ Integrator::Impl::Impl(const OdeSystem& system_in, const IntegratorOptions& opti
     // All allocation happens here, once; Reset() only re-initialises.
     check(CVodeInit(cvode, &Impl::RhsCallback, 0.0, y), "CVodeInit");
     check(CVodeSetUserData(cvode, this), "CVodeSetUserData");
-    check(CVodeSStolerances(cvode, options.relative_tolerance, options.absolute_tolerance),
-          "CVodeSStolerances");
+    if (options.error_controlled_states > 0 && options.error_controlled_states < n) {
+      // A huge absolute tolerance gives the other components a zero error weight.
+      N_Vector atol = N_VClone(y);
+      check_ptr(atol, "N_VClone");
+      double* a = N_VGetArrayPointer(atol);
+      for (int i = 0; i < n; ++i) {
+        a[i] = i < options.error_controlled_states ? options.absolute_tolerance : 1e300;
+      }
+      const int flag = CVodeSVtolerances(cvode, options.relative_tolerance, atol);
+      N_VDestroy(atol);  // CVODE keeps its own copy
+      check(flag, "CVodeSVtolerances");
+    } else {
+      check(CVodeSStolerances(cvode, options.relative_tolerance, options.absolute_tolerance),
+            "CVodeSStolerances");
+    }
     check(CVodeSetMaxNumSteps(cvode, options.max_steps_per_interval), "CVodeSetMaxNumSteps");
     if (options.max_order > 0) check(CVodeSetMaxOrd(cvode, options.max_order), "CVodeSetMaxOrd");
     // "t + h = t" warnings would only fill the error handler; a step that small fails anyway.
@@ -213,7 +227,8 @@ Integrator::Impl::Impl(const OdeSystem& system_in, const IntegratorOptions& opti
       // Tolerances for S from those of x (scaled by pbar = 1), and S in the error test, so the
       // sensitivities are as accurate as the state instead of merely consistent with it.
       check(CVodeSensEEtolerances(cvode), "CVodeSensEEtolerances");
-      check(CVodeSetSensErrCon(cvode, SUNTRUE), "CVodeSetSensErrCon");
+      check(CVodeSetSensErrCon(cvode, options.sensitivity_error_control ? SUNTRUE : SUNFALSE),
+            "CVodeSetSensErrCon");
       if (!options.newton) {
         // CVodeSensInit attached (and owns) a Newton sensitivity solver; replace it.
         sens_nonlinear_solver = SUNNonlinSol_FixedPointSens(ns, y, 0, context);

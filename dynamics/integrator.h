@@ -42,6 +42,14 @@ struct IntegratorOptions {
   // initial-step estimator, which costs extra RHS (and sensitivity RHS) evaluations at every
   // restart. Same accuracy; measured in bench/integrator_bench.cc.
   bool initial_step_hint = true;
+  // Include the sensitivities in CVODE's local error test (CVodeSetSensErrCon). Off, the step
+  // sizes follow the state alone and sensitivities cost far less; their accuracy then rests on
+  // the state's steps being fine enough (tests compare both against finite differences).
+  bool sensitivity_error_control = true;
+  // 0: every state is in CVODE's local error test. k > 0: only the first k states are; the
+  // others (e.g. the sensitivity part of a system augmented with its variational equations,
+  // dynamics/variational_system.h) ride along on the steps the first k need.
+  int error_controlled_states = 0;
 
   bool IsValid(std::string* why) const;
 };

@@ -8,7 +8,7 @@ namespace {
 
 // Derivative directions are taken kChunk at a time: 12 states plus P
 // parameters need ceil((12 + P) / kChunk) evaluations with Jets.
-constexpr int kChunk = 8;
+constexpr int kChunk = 16;
 using Jet = ceres::Jet<double, kChunk>;
 
 }  // namespace

@@ -6,11 +6,24 @@ namespace coaxid {
 
 Simulator::Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
                      const IntegratorOptions& options, const SensitivityOptions& sensitivities,
-                     std::vector<int> sensitivity_parameters)
+                     std::vector<int> sensitivity_parameters, SensitivityMethod method)
     : ode_(model, theta, std::move(sensitivity_parameters)),
-      integrator_(ode_, options, sensitivities),
-      sensitivity_options_(sensitivities),
-      with_sensitivities_(sensitivities.wrt_initial_state || sensitivities.wrt_parameters) {}
+      sensitivity_options_(sensitivities) {
+  const bool wanted = sensitivities.wrt_initial_state || sensitivities.wrt_parameters;
+  if (wanted && method == SensitivityMethod::kVariationalEquations) {
+    variational_ = std::make_unique<VariationalSystem>(ode_, sensitivities.wrt_initial_state,
+                                                       sensitivities.wrt_parameters);
+    columns_ = variational_->NumColumns();
+    IntegratorOptions augmented = options;
+    augmented.newton = false;  // fixed-point iteration on the augmented system
+    // Step sizes follow the state, as with CVODES and sensitivity_error_control off.
+    if (!options.sensitivity_error_control) augmented.error_controlled_states = kNumStates;
+    integrator_ = std::make_unique<Integrator>(*variational_, augmented);
+  } else {
+    integrator_ = std::make_unique<Integrator>(ode_, options, sensitivities);
+    columns_ = integrator_->num_sensitivities();
+  }
+}
 
 bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::VectorXd& x0,
                     Trajectory* out) {
@@ -19,31 +32,43 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
   out->times.assign(1, inputs.time(first));
   out->states.assign(1, x0);
   out->sensitivities.clear();
-  Eigen::VectorXd x = x0;
-  Eigen::MatrixXd S;
-  if (with_sensitivities_) {
-    // The natural initial sensitivities: [I | 0] (initial-state columns come
-    // first when carried, SensitivityOptions).
-    S = Eigen::MatrixXd::Zero(kNumStates, integrator_.num_sensitivities());
-    if (sensitivity_options_.wrt_initial_state) {
-      S.leftCols(kNumStates).setIdentity();
-    }
-    out->sensitivities.push_back(S);
+  const bool with_sensitivities = columns_ > 0;
+  // The natural initial sensitivities: [I | 0] (initial-state columns come
+  // first when carried, SensitivityOptions).
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(kNumStates, columns_);
+  if (sensitivity_options_.wrt_initial_state && columns_ >= kNumStates) {
+    S.leftCols(kNumStates).setIdentity();
   }
+  if (with_sensitivities) out->sensitivities.push_back(S);
+
+  Eigen::VectorXd x = x0;
+  Eigen::VectorXd z(variational_ ? variational_->NumStates() : 0);
   for (int k = first; k < last; ++k) {
     ode_.SetInput(inputs.input(k));
     // Restart at every input change: the right-hand side jumps there.
-    if (!integrator_.Reset(inputs.time(k), x, with_sensitivities_ ? &S : nullptr) ||
-        !integrator_.AdvanceTo(inputs.time(k + 1), &x, with_sensitivities_ ? &S : nullptr)) {
+    bool ok;
+    if (variational_) {
+      z.head(kNumStates) = x;
+      z.tail(z.size() - kNumStates) = Eigen::Map<const Eigen::VectorXd>(S.data(), S.size());
+      ok = integrator_->Reset(inputs.time(k), z) && integrator_->AdvanceTo(inputs.time(k + 1), &z);
+      if (ok) {
+        x = z.head(kNumStates);
+        S = Eigen::Map<const Eigen::MatrixXd>(z.data() + kNumStates, kNumStates, columns_);
+      }
+    } else {
+      ok = integrator_->Reset(inputs.time(k), x, with_sensitivities ? &S : nullptr) &&
+           integrator_->AdvanceTo(inputs.time(k + 1), &x, with_sensitivities ? &S : nullptr);
+    }
+    if (!ok) {
       error_ = "integration failed between t = " + std::to_string(inputs.time(k)) + " and " +
-               std::to_string(inputs.time(k + 1)) + " s: " + integrator_.last_error();
+               std::to_string(inputs.time(k + 1)) + " s: " + integrator_->last_error();
       return false;
     }
     if (!x.allFinite()) {
       error_ = "state not finite at t = " + std::to_string(inputs.time(k + 1)) + " s";
       return false;
     }
-    if (with_sensitivities_) out->sensitivities.push_back(S);
+    if (with_sensitivities) out->sensitivities.push_back(S);
     out->times.push_back(inputs.time(k + 1));
     out->states.push_back(x);
   }

@@ -11,7 +11,10 @@
 #include <Eigen/Core>
 
 #include "core/input_hold.h"
+#include <memory>
+
 #include "dynamics/integrator.h"
+#include "dynamics/variational_system.h"
 #include "dynamics/vehicle_ode.h"
 
 namespace coaxid {
@@ -22,13 +25,20 @@ struct Trajectory {
   std::vector<Eigen::MatrixXd> sensitivities;    // dx(t_k)/d[x0 | params], if asked
 };
 
+// How sensitivities are computed: CVODES's forward sensitivity module, or
+// CVODE on the state augmented with its variational equations (same
+// equations, one vector; sensitivities follow the state's steps). Both use the
+// autodiff Jacobians of the one model.
+enum class SensitivityMethod { kCvodes, kVariationalEquations };
+
 class Simulator {
  public:
   // sensitivity_parameters: indices into theta of the parameters whose
   // sensitivities are carried when sensitivities.wrt_parameters is set.
   Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
             const IntegratorOptions& options = {}, const SensitivityOptions& sensitivities = {},
-            std::vector<int> sensitivity_parameters = {});
+            std::vector<int> sensitivity_parameters = {},
+            SensitivityMethod method = SensitivityMethod::kVariationalEquations);
 
   void SetTheta(const Eigen::VectorXd& theta) { ode_.SetTheta(theta); }
 
@@ -40,13 +50,16 @@ class Simulator {
            Trajectory* out);
 
   const std::string& last_error() const { return error_; }
-  const Integrator& integrator() const { return integrator_; }
+  const Integrator& integrator() const { return *integrator_; }
+  // Number of sensitivity columns (0 without sensitivities).
+  int num_sensitivities() const { return columns_; }
 
  private:
   VehicleOde ode_;
-  Integrator integrator_;
+  std::unique_ptr<VariationalSystem> variational_;  // set for kVariationalEquations
+  std::unique_ptr<Integrator> integrator_;
   SensitivityOptions sensitivity_options_;
-  bool with_sensitivities_;
+  int columns_ = 0;
   std::string error_;
 };
 

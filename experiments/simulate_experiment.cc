@@ -5,6 +5,7 @@
 #include <random>
 
 #include "core/errors.h"
+#include "dynamics/outputs.h"
 #include "dynamics/trim.h"
 #include "dynamics/vehicle_ode.h"
 #include "experiments/excitation.h"
@@ -152,15 +153,8 @@ Log SimulateFlight(const Vehicle& truth, const FlightScenario& s, uint64_t seed,
   std::vector<std::vector<double>> values(columns.size());
   for (auto& v : values) v.reserve(steps);
 
-  // Each logged column is a state (its index) or an accelerometer axis (-1, -2, -3).
-  std::vector<int> column_source;
-  for (const std::string& name : s.columns) {
-    int source = name == "ax" ? -1 : name == "ay" ? -2 : name == "az" ? -3 : 0;
-    for (int i = 0; i < kNumStates; ++i) {
-      if (name == StateName(i)) source = i;
-    }
-    column_source.push_back(source);
-  }
+  std::vector<int> column_channel;  // the output channel of each logged column
+  for (const std::string& name : s.columns) column_channel.push_back(FlightChannelIndex(name));
 
   Eigen::VectorXd x = trim.state;
   for (int k = 0; k < steps; ++k) {
@@ -184,11 +178,14 @@ Log SimulateFlight(const Vehicle& truth, const FlightScenario& s, uint64_t seed,
     // with row k's inputs, model.md decision 7).
     values[0].push_back(t);
     for (int i = 0; i < 4; ++i) values[1 + i].push_back(sensed(kInputNames[i], u[i]));
-    const Vec3<double> f = truth.model.SpecificForce(theta.data(), x.data(), u.data());
+    // The states are logged as the controller measured them; the
+    // accelerometer is measured here, with row k's inputs (decision 7).
+    double outputs[kNumFlightChannels];
+    FlightOutputs(truth.model, theta.data(), x.data(), u.data(), outputs);
     for (size_t c = 0; c < s.columns.size(); ++c) {
-      const int source = column_source[c];
-      values[5 + c].push_back(source >= 0 ? measured[source]
-                                          : sensed(s.columns[c], f[-source - 1]));
+      const int channel = column_channel[c];
+      values[5 + c].push_back(channel < kNumStates ? measured[channel]
+                                                   : sensed(s.columns[c], outputs[channel]));
     }
     if (k + 1 == steps) break;
 

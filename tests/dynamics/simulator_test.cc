@@ -71,7 +71,9 @@ TEST(Simulator, AgreesWithIndependentRk4) {
   }
 }
 
-TEST(Simulator, SensitivitiesEqualFiniteDifferencesOfWholeSimulations) {
+class SimulatorSensitivities : public ::testing::TestWithParam<SensitivityMethod> {};
+
+TEST_P(SimulatorSensitivities, EqualFiniteDifferencesOfWholeSimulations) {
   const Fixture f = MakeFixture();
   const Eigen::VectorXd theta = f.vehicle.parameters.Values();
   // Every parameter of the vehicle (known ones too: the equations allow it).
@@ -80,7 +82,10 @@ TEST(Simulator, SensitivitiesEqualFiniteDifferencesOfWholeSimulations) {
   IntegratorOptions options;
   options.relative_tolerance = 1e-10;
   options.absolute_tolerance = 1e-12;
-  Simulator simulator(f.vehicle.model, theta, options, {true, true}, params);
+  // Sensitivities follow the state's steps (not in the error test): the
+  // configuration the estimators use.
+  options.sensitivity_error_control = false;
+  Simulator simulator(f.vehicle.model, theta, options, {true, true}, params, GetParam());
   const int first = 100, last = 300;  // 1 s
   Trajectory trajectory;
   ASSERT_TRUE(simulator.Run(f.inputs, first, last, f.x0, &trajectory)) << simulator.last_error();
@@ -118,6 +123,10 @@ TEST(Simulator, SensitivitiesEqualFiniteDifferencesOfWholeSimulations) {
         << "\nFD:   " << fd.transpose() << "\nCVODES: " << S.col(c).transpose();
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(BothMethods, SimulatorSensitivities,
+                         ::testing::Values(SensitivityMethod::kCvodes,
+                                           SensitivityMethod::kVariationalEquations));
 
 TEST(Simulator, ReportsBlownUpParametersInsteadOfCrashing) {
   const Fixture f = MakeFixture();

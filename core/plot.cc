@@ -1,0 +1,247 @@
+#include "core/plot.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "core/atomic_file.h"
+#include "core/errors.h"
+
+namespace coaxid {
+namespace {
+
+// A gnuplot single-quoted string: a quote inside is doubled.
+std::string Quoted(const std::string& text) {
+  std::string out = "'";
+  for (const char c : text) {
+    if (c == '\'') out += '\'';
+    if (c == '\n' || c == '\r') {
+      out += ' ';
+      continue;
+    }
+    out += c;
+  }
+  out += "'";
+  return out;
+}
+
+std::string Directory(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  return slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+}
+
+std::string BaseName(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+bool HasFinitePoint(const PlotSeries& s) {
+  const size_t n = std::min(s.x.size(), s.y.size());
+  for (size_t k = 0; k < n; ++k) {
+    if (std::isfinite(s.x[k]) && std::isfinite(s.y[k])) return true;
+  }
+  return false;
+}
+
+std::string FormatNumber(double v) {
+  if (std::isnan(v)) return "NaN";
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.9g", v);
+  return buffer;
+}
+
+// Runs `gnuplot -e "outfile='OUT'; term='TERM'" SCRIPT` in `dir` (the script
+// names its data file relative to its own folder), stdout discarded, stderr
+// kept in `err_path`. Returns the exit status, or -1 with errno-style reason.
+int RunGnuplot(const std::string& dir, const std::string& script, const std::string& out,
+               const std::string& term, const std::string& err_path, std::string* why) {
+  const std::string settings = "outfile=" + Quoted(out) + "; term=" + Quoted(term);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    *why = std::string("cannot start gnuplot: ") + std::strerror(errno);
+    return -1;
+  }
+  if (pid == 0) {
+    // Child: only async-signal-safe calls until exec.
+    if (::chdir(dir.c_str()) != 0) ::_exit(126);
+    const int null_fd = ::open("/dev/null", O_WRONLY);
+    const int err_fd = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (null_fd >= 0) ::dup2(null_fd, STDOUT_FILENO);
+    if (err_fd >= 0) ::dup2(err_fd, STDERR_FILENO);
+    const char* argv[] = {"gnuplot", "-e", settings.c_str(), script.c_str(), nullptr};
+    ::execvp("gnuplot", const_cast<char* const*>(argv));
+    ::_exit(127);  // not found or not executable
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) {
+      *why = std::string("waiting for gnuplot: ") + std::strerror(errno);
+      return -1;
+    }
+  }
+  if (!WIFEXITED(status)) {
+    *why = "gnuplot was killed by a signal";
+    return -1;
+  }
+  return WEXITSTATUS(status);
+}
+
+std::string ReadSmallFile(const std::string& path) {
+  try {
+    std::string text = ReadFile(path);
+    if (text.size() > 600) text = text.substr(0, 600) + "...";
+    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+    return text;
+  } catch (const InputError&) {
+    return "";
+  }
+}
+
+std::string Script(const Figure& figure, const std::string& data_name, const std::string& png_name) {
+  const int panels = static_cast<int>(figure.panels.size());
+  const int columns = std::max(1, figure.columns);
+  const int rows = std::max(1, (panels + columns - 1) / columns);
+  const int height = figure.height_px > 0 ? figure.height_px : 320 * rows + 40;
+  std::string s;
+  s += "# Made by coaxid (core/plot.cc). Rerun in this folder: gnuplot " +
+       png_name.substr(0, png_name.size() - 4) + ".gp\n";
+  s += "if (!exists(\"outfile\")) outfile = " + Quoted(png_name) + "\n";
+  s += "if (!exists(\"term\")) term = 'pngcairo'\n";
+  s += "eval sprintf(\"set terminal %s size %d,%d noenhanced\", term, " +
+       std::to_string(figure.width_px) + ", " + std::to_string(height) + ")\n";
+  s += "set output outfile\n";
+  s += "set grid\nset key outside right top\n";
+  s += "set multiplot layout " + std::to_string(rows) + "," + std::to_string(columns) +
+       " title " + Quoted(figure.title) + "\n";
+  int block = 0;
+  for (const PlotPanel& panel : figure.panels) {
+    s += "reset\nset grid\nset key outside right top\n";
+    s += "set title " + Quoted(panel.title) + "\n";
+    s += "set xlabel " + Quoted(panel.x_label) + "\n";
+    s += "set ylabel " + Quoted(panel.y_label) + "\n";
+    if (panel.log_y) s += "set logscale y\n";
+    if (std::isfinite(panel.y_min) || std::isfinite(panel.y_max)) {
+      s += "set yrange [" + (std::isfinite(panel.y_min) ? FormatNumber(panel.y_min) : "*") + ":" +
+           (std::isfinite(panel.y_max) ? FormatNumber(panel.y_max) : "*") + "]\n";
+    }
+    std::string plot;
+    for (const PlotSeries& series : panel.series) {
+      if (HasFinitePoint(series)) {
+        plot += plot.empty() ? "plot " : ", \\\n     ";
+        plot += Quoted(data_name) + " index " + std::to_string(block) + " using 1:2 with " +
+                series.style + " " +
+                (series.title.empty() ? std::string("notitle") : "title " + Quoted(series.title));
+      }
+      ++block;  // every series has a block in the data file, even an empty one
+    }
+    if (plot.empty()) {
+      s += "unset border\nunset tics\nset label 1 'no data' at graph 0.5,0.5 center\n";
+      plot = "plot [0:1][0:1] -1 notitle";
+    }
+    s += plot + "\n";
+  }
+  s += "unset multiplot\n";
+  return s;
+}
+
+std::string Data(const Figure& figure) {
+  std::string d;
+  int block = 0;
+  for (const PlotPanel& panel : figure.panels) {
+    for (const PlotSeries& series : panel.series) {
+      d += "# block " + std::to_string(block++) + ": " + panel.title + " / " + series.title + "\n";
+      const size_t n = std::min(series.x.size(), series.y.size());
+      for (size_t k = 0; k < n; ++k) {
+        d += FormatNumber(series.x[k]);
+        d += ' ';
+        d += FormatNumber(series.y[k]);
+        d += '\n';
+      }
+      // An empty block still needs a line so that `index` counts it.
+      if (n == 0) d += "NaN NaN\n";
+      d += "\n\n";
+    }
+  }
+  return d;
+}
+
+}  // namespace
+
+bool GnuplotAvailable() {
+  const char* path = std::getenv("PATH");
+  if (path == nullptr) return false;
+  std::string paths = path;
+  size_t start = 0;
+  while (start <= paths.size()) {
+    const size_t colon = paths.find(':', start);
+    std::string dir = paths.substr(start, colon == std::string::npos ? std::string::npos
+                                                                      : colon - start);
+    if (dir.empty()) dir = ".";
+    if (::access((dir + "/gnuplot").c_str(), X_OK) == 0) return true;
+    if (colon == std::string::npos) break;
+    start = colon + 1;
+  }
+  return false;
+}
+
+bool RenderFigure(const Figure& figure, const std::string& png_path, std::string* error) {
+  std::string ignored;
+  if (error == nullptr) error = &ignored;
+  if (png_path.size() < 5 || png_path.substr(png_path.size() - 4) != ".png") {
+    *error = "plot path '" + png_path + "' does not end in .png";
+    return false;
+  }
+  if (!GnuplotAvailable()) {
+    *error = "gnuplot is not installed (no gnuplot on the PATH)";
+    return false;
+  }
+  const std::string dir = Directory(png_path);
+  const std::string png_name = BaseName(png_path);
+  const std::string stem = png_name.substr(0, png_name.size() - 4);
+  const std::string data_name = stem + ".dat";
+  try {
+    WriteFileAtomically(dir + "/" + data_name, Data(figure));
+    WriteFileAtomically(dir + "/" + stem + ".gp", Script(figure, data_name, png_name));
+  } catch (const InputError& e) {
+    *error = e.what();
+    return false;
+  }
+  // gnuplot writes a temporary image renamed into place only on success: a
+  // failed run leaves no broken PNG.
+  const std::string tmp_name = "." + stem + ".tmp.png";
+  const std::string err_path = dir + "/." + stem + ".gnuplot.err";
+  bool ok = false;
+  for (const char* term : {"pngcairo", "png"}) {
+    std::string why;
+    const int status = RunGnuplot(dir, stem + ".gp", tmp_name, term, err_path, &why);
+    if (status == 0) {
+      ok = std::rename((dir + "/" + tmp_name).c_str(), png_path.c_str()) == 0;
+      if (!ok) *error = "cannot rename the image into place: " + std::string(std::strerror(errno));
+      break;
+    }
+    if (status == 127) {
+      *error = "gnuplot could not be run";
+      break;
+    }
+    const std::string messages = ReadSmallFile(err_path);
+    *error = status < 0 ? why
+                        : "gnuplot failed (exit " + std::to_string(status) + "): " + messages;
+    // Only a missing terminal is worth a second try with the plain png terminal.
+    if (messages.find("terminal") == std::string::npos) break;
+  }
+  ::unlink((dir + "/" + tmp_name).c_str());
+  ::unlink(err_path.c_str());
+  return ok;
+}
+
+}  // namespace coaxid

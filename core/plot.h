@@ -1,0 +1,51 @@
+// A small gnuplot wrapper for the figures a run writes next to its report, so
+// a user can look rather than read. The caller describes panels of x-y series;
+// RenderFigure writes the data (one block per series) and a gnuplot script
+// next to the image, then runs `gnuplot` on the script.
+//
+// Plots are a convenience, never a reason for a run to fail: when gnuplot is
+// missing or fails, RenderFigure returns false with the reason (the caller
+// notes "plots skipped" in its report) and leaves no half-made image behind.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace coaxid {
+
+struct PlotSeries {
+  std::string title;        // legend entry; empty: no legend entry
+  std::vector<double> x, y;  // same length; NaN is a gap
+  // gnuplot `with` clause, e.g. "lines lw 2", "lines dt 2", "points pt 7 ps 0.6".
+  std::string style = "lines";
+};
+
+struct PlotPanel {
+  std::string title, x_label, y_label;
+  bool log_y = false;  // logarithmic y axis (positive values only)
+  // y range; NaN (default) lets gnuplot choose that end.
+  double y_min = std::numeric_limits<double>::quiet_NaN();
+  double y_max = std::numeric_limits<double>::quiet_NaN();
+  std::vector<PlotSeries> series;
+};
+
+struct Figure {
+  std::string title;
+  std::vector<PlotPanel> panels;
+  int columns = 1;       // panels are laid out row by row, this many per row
+  int width_px = 1200;
+  int height_px = 0;     // 0: 320 px per row of panels
+};
+
+// Writes STEM.dat (the series) and STEM.gp (the script; rerun it with
+// `gnuplot STEM.gp` to tweak a figure), where STEM is png_path without its
+// ".png", and runs gnuplot to make png_path (terminal pngcairo, or png where
+// cairo is missing). Returns false with *error set when gnuplot is not
+// installed, fails, or a file cannot be written.
+bool RenderFigure(const Figure& figure, const std::string& png_path, std::string* error);
+
+// True if a `gnuplot` executable is on the PATH.
+bool GnuplotAvailable();
+
+}  // namespace coaxid

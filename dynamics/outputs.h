@@ -1,0 +1,50 @@
+// The output (measurement) models: what each log column is as a function of
+// the state, the inputs and the parameters. Written once, templated, and
+// shared by every estimator (output-error, EKF, the closing loop).
+//  - flight (log-format.md): the 12 states themselves and the accelerometer
+//    (model.md, decision 7: specific force (T + f_body + effects) / m);
+//  - balance (decision 5): the aerodynamic loads X..N and the per-rotor
+//    Z1, Z2, N1, N2.
+#pragma once
+
+#include "dynamics/vehicle_model.h"
+
+namespace coaxid {
+
+// Flight channels: the 12 states in StateIndex order, then ax, ay, az.
+inline constexpr int kNumFlightChannels = kNumStates + 3;
+enum FlightChannel : int { kAx = kNumStates, kAy, kAz };
+// Balance channels.
+enum BalanceChannel : int { kLoadX, kLoadY, kLoadZ, kLoadL, kLoadM, kLoadN, kLoadZ1, kLoadZ2,
+                            kLoadN1, kLoadN2, kNumBalanceChannels };
+
+// Log-format column names.
+const char* FlightChannelName(int channel);
+const char* BalanceChannelName(int channel);
+// -1 if `column` is not a channel of that kind.
+int FlightChannelIndex(const std::string& column);
+int BalanceChannelIndex(const std::string& column);
+
+// All 15 flight outputs at state x with inputs u.
+template <typename T>
+void FlightOutputs(const VehicleModel& model, const T* theta, const T* x, const T* u, T* y) {
+  for (int i = 0; i < kNumStates; ++i) y[i] = x[i];
+  const Vec3<T> f = model.SpecificForce(theta, x, u);
+  y[kAx] = f[0];
+  y[kAy] = f[1];
+  y[kAz] = f[2];
+}
+
+// All 10 balance outputs with inputs u (eqs. 57-63 with model.md's decisions).
+template <typename T>
+void BalanceOutputs(const VehicleModel& model, const T* theta, const T* u, T* y) {
+  const AeroLoads<T> a = model.Loads(theta, u, Setting::kBalance, static_cast<const T*>(nullptr));
+  for (int i = 0; i < 3; ++i) y[kLoadX + i] = a.force_B[i];
+  for (int i = 0; i < 3; ++i) y[kLoadL + i] = a.moment_B[i];
+  y[kLoadZ1] = a.Z1;
+  y[kLoadZ2] = a.Z2;
+  y[kLoadN1] = a.N1;
+  y[kLoadN2] = a.N2;
+}
+
+}  // namespace coaxid
