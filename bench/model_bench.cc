@@ -6,12 +6,12 @@
 // (the paper's model) and with every effect of the library enabled.
 //
 // Run: model_bench [--benchmark_filter=...]
+#include <benchmark/benchmark.h>
+#include <ceres/jet.h>
+
 #include <map>
 #include <string>
 #include <vector>
-
-#include <benchmark/benchmark.h>
-#include <ceres/jet.h>
 
 #include "core/input_hold.h"
 #include "core/parameters.h"
@@ -96,8 +96,8 @@ void BM_DerivativeJacobians12Unknowns(benchmark::State& state) {
   for (int i = kAlpha; i < kNumBaseParameters; ++i) indices.push_back(i);
   Eigen::MatrixXd dfdx, dfdp;
   for (auto _ : state) {
-    const bool ok = DerivativeJacobians(v.model, theta, x.data(), kBenchInput, indices, &dfdx,
-                                        &dfdp);
+    const bool ok =
+        DerivativeJacobians(v.model, theta, x.data(), kBenchInput, indices, &dfdx, &dfdp);
     benchmark::DoNotOptimize(ok);
     benchmark::DoNotOptimize(dfdx.data());
     benchmark::DoNotOptimize(dfdp.data());

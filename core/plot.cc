@@ -107,7 +107,8 @@ std::string ReadSmallFile(const std::string& path) {
   }
 }
 
-std::string Script(const Figure& figure, const std::string& data_name, const std::string& png_name) {
+std::string Script(const Figure& figure, const std::string& data_name,
+                   const std::string& png_name) {
   const int panels = static_cast<int>(figure.panels.size());
   const int columns = std::max(1, figure.columns);
   const int rows = std::max(1, (panels + columns - 1) / columns);
@@ -120,12 +121,11 @@ std::string Script(const Figure& figure, const std::string& data_name, const std
   s += "eval sprintf(\"set terminal %s size %d,%d noenhanced\", term, " +
        std::to_string(figure.width_px) + ", " + std::to_string(height) + ")\n";
   s += "set output outfile\n";
-  s += "set grid\nset key outside right top\n";
-  s += "set multiplot layout " + std::to_string(rows) + "," + std::to_string(columns) +
-       " title " + Quoted(figure.title) + "\n";
+  s += "set multiplot layout " + std::to_string(rows) + "," + std::to_string(columns) + " title " +
+       Quoted(figure.title) + "\n";
   int block = 0;
   for (const PlotPanel& panel : figure.panels) {
-    s += "reset\nset grid\nset key outside right top\n";
+    s += "reset\nset grid\nset key " + panel.key + "\n";
     s += "set title " + Quoted(panel.title) + "\n";
     s += "set xlabel " + Quoted(panel.x_label) + "\n";
     s += "set ylabel " + Quoted(panel.y_label) + "\n";
@@ -184,8 +184,8 @@ bool GnuplotAvailable() {
   size_t start = 0;
   while (start <= paths.size()) {
     const size_t colon = paths.find(':', start);
-    std::string dir = paths.substr(start, colon == std::string::npos ? std::string::npos
-                                                                      : colon - start);
+    std::string dir =
+        paths.substr(start, colon == std::string::npos ? std::string::npos : colon - start);
     if (dir.empty()) dir = ".";
     if (::access((dir + "/gnuplot").c_str(), X_OK) == 0) return true;
     if (colon == std::string::npos) break;
@@ -234,8 +234,7 @@ bool RenderFigure(const Figure& figure, const std::string& png_path, std::string
       break;
     }
     const std::string messages = ReadSmallFile(err_path);
-    *error = status < 0 ? why
-                        : "gnuplot failed (exit " + std::to_string(status) + "): " + messages;
+    *error = status < 0 ? why : "gnuplot failed (exit " + std::to_string(status) + "): " + messages;
     // Only a missing terminal is worth a second try with the plain png terminal.
     if (messages.find("terminal") == std::string::npos) break;
   }

@@ -15,7 +15,7 @@
 namespace coaxid {
 
 struct PlotSeries {
-  std::string title;        // legend entry; empty: no legend entry
+  std::string title;         // legend entry; empty: no legend entry
   std::vector<double> x, y;  // same length; NaN is a gap
   // gnuplot `with` clause, e.g. "lines lw 2", "lines dt 2", "points pt 7 ps 0.6".
   std::string style = "lines";
@@ -23,7 +23,8 @@ struct PlotSeries {
 
 struct PlotPanel {
   std::string title, x_label, y_label;
-  bool log_y = false;  // logarithmic y axis (positive values only)
+  bool log_y = false;                    // logarithmic y axis (positive values only)
+  std::string key = "below horizontal";  // gnuplot `set key` arguments (where the legend goes)
   // y range; NaN (default) lets gnuplot choose that end.
   double y_min = std::numeric_limits<double>::quiet_NaN();
   double y_max = std::numeric_limits<double>::quiet_NaN();
@@ -33,9 +34,9 @@ struct PlotPanel {
 struct Figure {
   std::string title;
   std::vector<PlotPanel> panels;
-  int columns = 1;       // panels are laid out row by row, this many per row
+  int columns = 1;  // panels are laid out row by row, this many per row
   int width_px = 1200;
-  int height_px = 0;     // 0: 320 px per row of panels
+  int height_px = 0;  // 0: 320 px per row of panels
 };
 
 // Writes STEM.dat (the series) and STEM.gp (the script; rerun it with

@@ -20,4 +20,16 @@ bool DerivativeJacobians(const VehicleModel& model, const Eigen::VectorXd& theta
                          const std::vector<int>& parameter_indices, Eigen::MatrixXd* dfdx,
                          Eigen::MatrixXd* dfdp);
 
+// The 15 flight outputs (outputs.h) y and their Jacobians w.r.t. the state
+// (15 x 12) and theta[parameter_indices] (15 x P); any output pointer may be null.
+bool FlightOutputJacobians(const VehicleModel& model, const Eigen::VectorXd& theta,
+                           const double* x, const InputVector& input,
+                           const std::vector<int>& parameter_indices, double* y,
+                           Eigen::MatrixXd* dydx, Eigen::MatrixXd* dydp);
+
+// The 10 balance outputs and their Jacobian w.r.t. theta[parameter_indices].
+bool BalanceOutputJacobians(const VehicleModel& model, const Eigen::VectorXd& theta,
+                            const InputVector& input, const std::vector<int>& parameter_indices,
+                            double* y, Eigen::MatrixXd* dydp);
+
 }  // namespace coaxid

@@ -15,8 +15,8 @@ namespace coaxid {
 inline constexpr int kNumFlightChannels = kNumStates + 3;
 enum FlightChannel : int { kAx = kNumStates, kAy, kAz };
 // Balance channels.
-enum BalanceChannel : int { kLoadX, kLoadY, kLoadZ, kLoadL, kLoadM, kLoadN, kLoadZ1, kLoadZ2,
-                            kLoadN1, kLoadN2, kNumBalanceChannels };
+enum BalanceChannel : int { kBalanceX, kBalanceY, kBalanceZ, kBalanceL, kBalanceM, kBalanceN,
+                            kBalanceZ1, kBalanceZ2, kBalanceN1, kBalanceN2, kNumBalanceChannels };
 
 // Log-format column names.
 const char* FlightChannelName(int channel);
@@ -39,12 +39,12 @@ void FlightOutputs(const VehicleModel& model, const T* theta, const T* x, const 
 template <typename T>
 void BalanceOutputs(const VehicleModel& model, const T* theta, const T* u, T* y) {
   const AeroLoads<T> a = model.Loads(theta, u, Setting::kBalance, static_cast<const T*>(nullptr));
-  for (int i = 0; i < 3; ++i) y[kLoadX + i] = a.force_B[i];
-  for (int i = 0; i < 3; ++i) y[kLoadL + i] = a.moment_B[i];
-  y[kLoadZ1] = a.Z1;
-  y[kLoadZ2] = a.Z2;
-  y[kLoadN1] = a.N1;
-  y[kLoadN2] = a.N2;
+  for (int i = 0; i < 3; ++i) y[kBalanceX + i] = a.force_B[i];
+  for (int i = 0; i < 3; ++i) y[kBalanceL + i] = a.moment_B[i];
+  y[kBalanceZ1] = a.Z1;
+  y[kBalanceZ2] = a.Z2;
+  y[kBalanceN1] = a.N1;
+  y[kBalanceN2] = a.N2;
 }
 
 }  // namespace coaxid

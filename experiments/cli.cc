@@ -12,6 +12,7 @@
 #include "core/report.h"
 #include "dynamics/vehicle.h"
 #include "experiments/cli_flags.h"
+#include "experiments/identify_command.h"
 #include "experiments/log_summary.h"
 #include "experiments/scenario.h"
 #include "experiments/simulate_experiment.h"
@@ -24,7 +25,9 @@ namespace fs = std::filesystem;
 constexpr const char* kUsage =
     "usage: coaxid <subcommand> [--flags]\n"
     "  simulate --config=F --scenario=S --out=FILE.csv [--truth=T.json] [--seed=N]\n"
-    "  check    --logs=A.csv[,B.csv...]\n"
+    "  check    --logs=A.csv[,B.csv...] [--config=F]\n"
+    "  identify --method=linear_kf --logs=A.csv[,B.csv...] --config=F --out=DIR\n"
+    "           [--validate=C.csv,...] [--holdout_fraction=0.2] [--process_noise=0]\n"
     "  demo     --out=DIR\n"
     "Run `coaxid --help` for every flag.\n";
 
@@ -75,6 +78,7 @@ int Check() {
     const nlohmann::json summary = SummarizeLog(log);
     std::cout << SummaryMarkdown(log.source, summary);
   }
+  std::cout << LinearKfCheckText(logs, FLAGS_config);
   std::cout << "check: " << logs.size() << " log(s) valid\n";
   return 0;
 }
@@ -187,6 +191,7 @@ int RunCli(int argc, char** argv) {
     if (command == "simulate") return Simulate();
     if (command == "check") return Check();
     if (command == "demo") return Demo();
+    if (command == "identify") return RunIdentify();
     std::cerr << "coaxid: unknown subcommand '" << command << "'\n" << kUsage;
     return 2;
   } catch (const InputError& e) {

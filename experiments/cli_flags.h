@@ -10,3 +10,7 @@ DECLARE_string(truth);
 DECLARE_int64(seed);
 DECLARE_string(logs);
 DECLARE_string(data_dir);
+DECLARE_string(method);
+DECLARE_string(validate);
+DECLARE_double(holdout_fraction);
+DECLARE_double(process_noise);

@@ -151,7 +151,8 @@ int HoldoutStartRow(const Log& log, double fraction) {
   if (fraction == 0) return rows;
   const std::vector<int> starts = HoldStarts(ReadInputs(log, 0, rows), SteadyPoints(log));
   if (starts.size() < 2) {
-    throw InputError(source + ": a single constant-input hold: nothing can be held out for "
+    throw InputError(source +
+                     ": a single constant-input hold: nothing can be held out for "
                      "validation without splitting it (give --validate=LOGS or "
                      "--holdout_fraction=0)");
   }

@@ -33,9 +33,9 @@ using LoadCounts = std::array<int, kNumLoadChannels>;
 struct BalanceHold {
   int first_row = 0;  // rows [first_row, first_row + num_rows) of its BalanceData
   int num_rows = 0;
-  InputVector input{};  // omega1 [rad/s], omega2 [rad/s], delta_cx [rad], delta_cy [rad]
-  LoadCounts count{};   // finite samples per channel (0 where the column is absent)
-  LoadVector mean{};    // over the finite samples; NaN where count is 0
+  InputVector input{};       // omega1 [rad/s], omega2 [rad/s], delta_cx [rad], delta_cy [rad]
+  LoadCounts count{};        // finite samples per channel (0 where the column is absent)
+  LoadVector mean{};         // over the finite samples; NaN where count is 0
   LoadVector sum_squares{};  // sum of (value - mean)^2 over the finite samples
 };
 

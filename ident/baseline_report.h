@@ -5,10 +5,9 @@
 // writes the files.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/parameters.h"
 #include "ident/linear_baseline.h"
@@ -16,11 +15,11 @@
 namespace coaxid {
 
 struct BaselineReportContext {
-  std::vector<std::string> logs;             // estimation logs as given
-  std::vector<std::string> validation_logs;  // --validate logs (empty: held-out parts)
-  std::string validation_description;        // which rows were held out, or which logs
+  std::vector<std::string> logs;                      // estimation logs as given
+  std::vector<std::string> validation_logs;           // --validate logs (empty: held-out parts)
+  std::string validation_description;                 // which rows were held out, or which logs
   nlohmann::json outputs = nlohmann::json::object();  // files written, plots (or why skipped)
-  std::vector<std::string> notes;            // the caller's notes, added to the result's
+  std::vector<std::string> notes;                     // the caller's notes, added to the result's
 };
 
 // report.json. config: the vehicle's parameters (known constants, d, and the

@@ -1,5 +1,6 @@
 #include "ident/excitation.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -7,8 +8,6 @@
 #include <limits>
 #include <string>
 #include <vector>
-
-#include <Eigen/Eigenvalues>
 
 namespace coaxid {
 namespace {
@@ -22,7 +21,15 @@ std::string Format(const char* format, double v) {
 // The O(N) witness search of Lemma 1 over holds (rows of a hold share their
 // inputs): the longest vector is the reference, the vector least parallel to
 // it the other witness.
+// A sample with both rotors stopped (below stopped_speed) carries no
+// information, and the sensor noise of a stopped rotor's speed would pass for
+// a speed ratio: it takes no part in the conditions.
+bool Turning(const InputVector& u, double stopped_speed) {
+  return std::fabs(u[0]) >= stopped_speed || std::fabs(u[1]) >= stopped_speed;
+}
+
 WitnessPair FindWitness(const std::vector<const BalanceData*>& data, int channel,
+                        double stopped_speed,
                         const std::function<std::array<double, 2>(const InputVector&)>& vec,
                         int* samples) {
   WitnessPair w;
@@ -33,7 +40,7 @@ WitnessPair FindWitness(const std::vector<const BalanceData*>& data, int channel
   for (int i = 0; i < static_cast<int>(data.size()); ++i) {
     for (int h = 0; h < data[i]->NumHolds(); ++h) {
       const BalanceHold& hold = data[i]->holds[h];
-      if (hold.count[channel] == 0) continue;
+      if (hold.count[channel] == 0 || !Turning(hold.input, stopped_speed)) continue;
       const std::array<double, 2> v = vec(hold.input);
       const double norm = std::hypot(v[0], v[1]);
       if (!(norm > 0)) continue;
@@ -50,7 +57,7 @@ WitnessPair FindWitness(const std::vector<const BalanceData*>& data, int channel
   for (int i = 0; i < static_cast<int>(data.size()); ++i) {
     for (int h = 0; h < data[i]->NumHolds(); ++h) {
       const BalanceHold& hold = data[i]->holds[h];
-      if (hold.count[channel] == 0) continue;
+      if (hold.count[channel] == 0 || !Turning(hold.input, stopped_speed)) continue;
       const std::array<double, 2> v = vec(hold.input);
       const double norm = std::hypot(v[0], v[1]);
       if (!(norm > 0)) continue;
@@ -76,8 +83,9 @@ void ComposeMessage(const ExcitationOptions& options, ExcitationReport* r) {
               "turning, so Cz_alpha and Cz_beta are not observed; log Z with the rotors turning"
             : "Lemma 1, condition (71)/(77) fails: omega1^2 and omega2^2 cos(delta_cx) "
               "cos(delta_cy) keep one ratio at every sample with Z (largest |sin| between "
-              "samples " + Format("%.2g", r->witness71.sine) + " <= " +
-                  Format("%.2g", options.relative_tolerance) +
+              "samples " +
+                  Format("%.2g", r->witness71.sine) +
+                  " <= " + Format("%.2g", options.relative_tolerance) +
                   "), so X32 and X33 are proportional and Cz_alpha and Cz_beta cannot be told "
                   "apart; omega1 and omega2 must vary independently (their ratio must change)");
   }
@@ -88,8 +96,8 @@ void ComposeMessage(const ExcitationOptions& options, ExcitationReport* r) {
               "turning, so gamma1 and gamma2 are not observed; log N with the rotors turning"
             : "Lemma 1, condition (72)/(79) fails: omega1^2 / omega2^2 is the same at every "
               "sample with N (largest |sin| between samples " +
-                  Format("%.2g", r->witness72.sine) + " <= " +
-                  Format("%.2g", options.relative_tolerance) +
+                  Format("%.2g", r->witness72.sine) +
+                  " <= " + Format("%.2g", options.relative_tolerance) +
                   "), so X64 and X65 are proportional and gamma1 and gamma2 cannot be told "
                   "apart; omega1 and omega2 must vary independently (the ratio omega1/omega2 "
                   "must change)");
@@ -97,8 +105,11 @@ void ComposeMessage(const ExcitationOptions& options, ExcitationReport* r) {
   if (!r->swashplate) {
     failures.push_back(
         "the swashplate condition fails: at every sample with L or M measured and the lower "
-        "rotor turning, |delta_cx| <= " + Format("%.3g", r->max_abs_delta_cx) + " rad and "
-        "|delta_cy| <= " + Format("%.3g", r->max_abs_delta_cy) + " rad (threshold " +
+        "rotor turning, |delta_cx| <= " +
+        Format("%.3g", r->max_abs_delta_cx) +
+        " rad and "
+        "|delta_cy| <= " +
+        Format("%.3g", r->max_abs_delta_cy) + " rad (threshold " +
         Format("%.3g", options.min_swashplate_angle) +
         " rad), so X41 = X51 = 0 and beta is seen only through Z, where X31 and X33 are "
         "collinear: beta and Cz_beta cannot be separated; delta_cx or delta_cy must vary with "
@@ -108,23 +119,28 @@ void ComposeMessage(const ExcitationOptions& options, ExcitationReport* r) {
     std::string direction;
     for (int i = 0; i < kNumTheta; ++i) {
       if (std::fabs(r->weakest_direction[i]) < 0.05) continue;
-      direction += (direction.empty() ? "" : " ") +
-                   Format("%+.2f", r->weakest_direction[i]) + " " + ThetaName(i);
+      direction += (direction.empty() ? "" : " ") + Format("%+.2f", r->weakest_direction[i]) + " " +
+                   ThetaName(i);
     }
-    failures.push_back("eq. (73) fails numerically: the scaled, noise-weighted sum X_k^T R^-1 X_k "
-                       "has condition number " + Format("%.3g", r->scaled_condition_number) +
-                       " > " + Format("%.3g", options.max_condition_number) +
-                       "; the weakest direction (in parameter scales) is " + direction +
-                       "; the inputs must vary more (longer holds or wider speed and angle "
-                       "ranges)");
+    failures.push_back(
+        "eq. (73) fails numerically: the scaled, noise-weighted sum X_k^T R^-1 X_k "
+        "has condition number " +
+        Format("%.3g", r->scaled_condition_number) + " > " +
+        Format("%.3g", options.max_condition_number) +
+        "; the weakest direction (in parameter scales) is " + direction +
+        "; the inputs must vary more (longer holds or wider speed and angle "
+        "ranges)");
   }
   if (failures.empty()) {
-    r->message = "persistently exciting: Lemma 1 conditions (71) and (72) and the swashplate "
-                 "condition hold";
+    r->message =
+        "persistently exciting: Lemma 1 conditions (71) and (72) and the swashplate "
+        "condition hold";
     if (r->information_computed) {
       r->message += ", and eq. (73) with epsilon = " + Format("%.4g", r->epsilon) +
-                    ", mu = " + Format("%.4g", r->mu) + " (scaled, noise-weighted condition "
-                    "number " + Format("%.3g", r->scaled_condition_number) + ")";
+                    ", mu = " + Format("%.4g", r->mu) +
+                    " (scaled, noise-weighted condition "
+                    "number " +
+                    Format("%.3g", r->scaled_condition_number) + ")";
     }
     return;
   }
@@ -154,15 +170,16 @@ ExcitationReport CheckLemma1(const std::vector<const BalanceData*>& data,
                              const ExcitationOptions& options) {
   ExcitationReport r;
   r.witness71 = FindWitness(
-      data, kLoadZ,
+      data, kLoadZ, options.stopped_speed,
       [](const InputVector& u) {
-        return std::array<double, 2>{u[0] * u[0],
-                                     u[1] * u[1] * std::cos(u[2]) * std::cos(u[3])};
+        return std::array<double, 2>{u[0] * u[0], u[1] * u[1] * std::cos(u[2]) * std::cos(u[3])};
       },
       &r.samples71);
   r.witness72 = FindWitness(
-      data, kLoadN,
-      [](const InputVector& u) { return std::array<double, 2>{u[0] * u[0], u[1] * u[1]}; },
+      data, kLoadN, options.stopped_speed,
+      [](const InputVector& u) {
+        return std::array<double, 2>{u[0] * u[0], u[1] * u[1]};
+      },
       &r.samples72);
   r.witness71.found = r.witness71.sine > options.relative_tolerance;
   r.witness72.found = r.witness72.sine > options.relative_tolerance;
@@ -172,18 +189,18 @@ ExcitationReport CheckLemma1(const std::vector<const BalanceData*>& data,
   for (const BalanceData* d : data) {
     for (const BalanceHold& hold : d->holds) {
       if (std::fabs(hold.input[1]) < options.stopped_speed) continue;
+      int samples = 0;  // rows of this hold where X41 or X51 is nonzero and measured
       if (hold.count[kLoadL] > 0) {
         r.max_abs_delta_cx = std::max(r.max_abs_delta_cx, std::fabs(hold.input[2]));
-        if (std::fabs(hold.input[2]) > options.min_swashplate_angle) {
-          r.swashplate_samples += hold.count[kLoadL];
-        }
+        if (std::fabs(hold.input[2]) > options.min_swashplate_angle) samples = hold.count[kLoadL];
       }
       if (hold.count[kLoadM] > 0) {
         r.max_abs_delta_cy = std::max(r.max_abs_delta_cy, std::fabs(hold.input[3]));
         if (std::fabs(hold.input[3]) > options.min_swashplate_angle) {
-          r.swashplate_samples += hold.count[kLoadM];
+          samples = std::max(samples, hold.count[kLoadM]);
         }
       }
+      r.swashplate_samples += samples;
     }
   }
   r.swashplate = r.swashplate_samples > 0;
@@ -216,13 +233,14 @@ void AddInformationMatrix(const LinearBalanceModel& model,
   report->eigenvalues = raw_eigen.eigenvalues();
   report->epsilon = report->eigenvalues[0];
   report->mu = report->eigenvalues[kNumTheta - 1];
-  report->condition_number = report->epsilon > 0 ? report->mu / report->epsilon
-                                                 : std::numeric_limits<double>::infinity();
+  report->condition_number =
+      report->epsilon > 0 ? report->mu / report->epsilon : std::numeric_limits<double>::infinity();
   report->scaled_eigenvalues = weighted_eigen.eigenvalues();
   report->weakest_direction = weighted_eigen.eigenvectors().col(0);
   const double lo = report->scaled_eigenvalues[0], hi = report->scaled_eigenvalues[kNumTheta - 1];
   report->scaled_condition_number = lo > 0 ? hi / lo : std::numeric_limits<double>::infinity();
-  report->well_conditioned = lo > 0 && report->scaled_condition_number <= options.max_condition_number;
+  report->well_conditioned =
+      lo > 0 && report->scaled_condition_number <= options.max_condition_number;
   ComposeMessage(options, report);
 }
 
@@ -248,8 +266,8 @@ std::string ExcitationText(const ExcitationReport& r, const std::vector<const Ba
        " rad, max |delta_cy| = " + Format("%.3g", r.max_abs_delta_cy) + " rad)\n";
   if (r.information_computed) {
     s += "  sum X_k^T X_k (eq. 74): epsilon = " + Format("%.4g", r.epsilon) +
-         ", mu = " + Format("%.4g", r.mu) + ", condition number = " +
-         Format("%.4g", r.condition_number) + "\n";
+         ", mu = " + Format("%.4g", r.mu) +
+         ", condition number = " + Format("%.4g", r.condition_number) + "\n";
     s += "  scaled, noise-weighted: eigenvalues " + Format("%.3g", r.scaled_eigenvalues[0]) +
          " .. " + Format("%.3g", r.scaled_eigenvalues[kNumTheta - 1]) +
          ", condition number = " + Format("%.4g", r.scaled_condition_number) + "\n";

@@ -12,7 +12,8 @@
 // longest vector as reference; the condition holds if and only if some vector
 // is not parallel to it, and that pair is the witness. "Not parallel" means
 // |sin(angle)| > relative_tolerance, so that round-off and sensor noise on a
-// fixed speed ratio do not pass for excitation.
+// fixed speed ratio do not pass for excitation; samples with both rotors
+// stopped (below stopped_speed) take no part.
 //
 // The paper's proof takes the beta row of Y^T as independent of the others.
 // Because X31 and X33 are exactly collinear, it is so only through L and M:
@@ -39,7 +40,7 @@ namespace coaxid {
 struct ExcitationOptions {
   double relative_tolerance = 1e-3;    // |sin(angle)| above which two samples differ (71-72)
   double min_swashplate_angle = 1e-3;  // rad: smaller angles count as no swashplate motion
-  double stopped_speed = 1.0;          // rad/s: a slower lower rotor is stopped
+  double stopped_speed = 1.0;          // rad/s: a slower rotor is stopped
   double max_condition_number = 1e10;  // of the scaled, noise-weighted information matrix
   bool IsValid(std::string* why) const;
 };
@@ -57,7 +58,8 @@ struct ExcitationReport {
   WitnessPair witness71, witness72;
   int samples71 = 0, samples72 = 0;  // samples with Z (resp. N) and a nonzero vector
   int swashplate_samples = 0;        // samples where X41 or X51 is nonzero and measured
-  double max_abs_delta_cx = 0, max_abs_delta_cy = 0;  // over samples with L / M and the lower rotor turning
+  double max_abs_delta_cx = 0,
+         max_abs_delta_cy = 0;  // over samples with L / M and the lower rotor turning
 
   // Eqs. 73-74 (when computed).
   bool information_computed = false;

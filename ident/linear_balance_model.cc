@@ -33,8 +33,7 @@ void Locate(const std::vector<double>& grid, double w, int* cell, double* fracti
 }  // namespace
 
 const char* ThetaName(int index) {
-  static const char* const kNames[kNumTheta] = {"beta", "Cz_alpha", "Cz_beta", "gamma1",
-                                                "gamma2"};
+  static const char* const kNames[kNumTheta] = {"beta", "Cz_alpha", "Cz_beta", "gamma1", "gamma2"};
   CHECK(index >= 0 && index < kNumTheta) << "Theta index " << index;
   return kNames[index];
 }
@@ -54,15 +53,15 @@ LinearizedLoads LinearBalanceModel::Linearize(const InputVector& u) const {
   out.sigma = s;
   BalanceRegressor& X = out.X;
   X.setZero();
-  X(kLoadX, kThetaBeta) = -sy * cx * w2;                  // X11
-  X(kLoadY, kThetaBeta) = -sx * w2;                       // X21
-  X(kLoadZ, kThetaBeta) = s * cy * cx * w2;               // X31
-  X(kLoadZ, kThetaCzAlpha) = -s * area_ratio * w1;        // X32
+  X(kLoadX, kThetaBeta) = -sy * cx * w2;                     // X11
+  X(kLoadY, kThetaBeta) = -sx * w2;                          // X21
+  X(kLoadZ, kThetaBeta) = s * cy * cx * w2;                  // X31
+  X(kLoadZ, kThetaCzAlpha) = -s * area_ratio * w1;           // X32
   X(kLoadZ, kThetaCzBeta) = -s * area_ratio * cy * cx * w2;  // X33
-  X(kLoadL, kThetaBeta) = -d * sx * w2;                   // X41
-  X(kLoadM, kThetaBeta) = d * sy * cx * w2;               // X51
-  X(kLoadN, kThetaGamma1) = w1;                           // X64
-  X(kLoadN, kThetaGamma2) = w2;                           // X65
+  X(kLoadL, kThetaBeta) = -d * sx * w2;                      // X41
+  X(kLoadM, kThetaBeta) = d * sy * cx * w2;                  // X51
+  X(kLoadN, kThetaGamma1) = w1;                              // X64
+  X(kLoadN, kThetaGamma2) = w2;                              // X65
   out.offset.fill(0.0);
   out.offset[kLoadZ] = s * alpha * w1;  // Z_bar = Z - sigma alpha w1 (eq. 69)
   return out;

@@ -21,9 +21,8 @@
 // through L and M, that is through d.
 #pragma once
 
-#include <array>
-
 #include <Eigen/Core>
+#include <array>
 
 #include "core/input_hold.h"
 #include "core/vehicle_config.h"
@@ -32,8 +31,14 @@
 namespace coaxid {
 
 // The parameter vector Theta of eq. 68, in this order.
-enum ThetaIndex : int { kThetaBeta, kThetaCzAlpha, kThetaCzBeta, kThetaGamma1, kThetaGamma2,
-                        kNumTheta };
+enum ThetaIndex : int {
+  kThetaBeta,
+  kThetaCzAlpha,
+  kThetaCzBeta,
+  kThetaGamma1,
+  kThetaGamma2,
+  kNumTheta
+};
 // "beta", "Cz_alpha", "Cz_beta", "gamma1", "gamma2".
 const char* ThetaName(int index);
 
@@ -46,7 +51,7 @@ using BalanceRegressor = Eigen::Matrix<double, kNumLoadChannels, kNumTheta>;
 // Z_bar, L, M, N. X and Y only validate (paper, sect. 3 and 5).
 inline constexpr int kNumEstimationChannels = 4;
 inline constexpr std::array<int, kNumEstimationChannels> kEstimationChannels = {kLoadZ, kLoadL,
-                                                                                 kLoadM, kLoadN};
+                                                                                kLoadM, kLoadN};
 
 // The model at one input: loads = X Theta + offset.
 struct LinearizedLoads {

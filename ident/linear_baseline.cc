@@ -54,8 +54,8 @@ bool HasSamples(const BalanceData& data, int c) {
 
 // beta from X and Y alone: X = X11 beta, Y = X21 beta (eqs. 61-62), weighted
 // least squares on hold means; independent of d.
-Estimate BetaFromXY(const LinearBalanceModel& model, const std::vector<BalanceData>& data,
-                    const std::vector<NoiseCovariance>& noise) {
+BaselineEstimate BetaFromXY(const LinearBalanceModel& model, const std::vector<BalanceData>& data,
+                            const std::vector<NoiseCovariance>& noise) {
   double num = 0, den = 0;
   for (size_t i = 0; i < data.size(); ++i) {
     const LoadVector var = noise[i].Variances();
@@ -69,7 +69,7 @@ Estimate BetaFromXY(const LinearBalanceModel& model, const std::vector<BalanceDa
       }
     }
   }
-  Estimate e;
+  BaselineEstimate e;
   if (den > 0) {
     e.value = num / den;
     e.std = 1 / std::sqrt(den);
@@ -104,12 +104,37 @@ LinearKfOptions KfOptionsFromConfig(const ParameterSet& config,
   const Parameter& gamma2 = config.Get("gamma2");
   kf.initial << beta.value, Cz.value * alpha.value, Cz.value * beta.value, gamma1.value,
       gamma2.value;
-  kf.scale << beta.scale, Cz.scale * alpha.scale, Cz.scale * beta.scale, gamma1.scale,
-      gamma2.scale;
+  kf.scale << beta.scale, Cz.scale * alpha.scale, Cz.scale * beta.scale, gamma1.scale, gamma2.scale;
   kf.prior_std = options.prior_std;
   kf.process_noise = options.process_noise;
   kf.history_stride = options.history_stride;
   return kf;
+}
+
+ExcitationReport CheckBalanceExcitation(const ParameterSet& config,
+                                        const std::vector<BalanceData>& data,
+                                        const LinearBaselineOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("linear_kf options: " + why);
+  std::vector<const BalanceData*> pointers;
+  for (const BalanceData& d : data) pointers.push_back(&d);
+  ExcitationReport report = CheckLemma1(pointers, options.excitation);
+  LinearBalanceModel model;
+  model.d = config.Value("d");
+  const double D = config.Value("D"), R = config.Value("R");
+  model.area_ratio = R > 0 ? (D * D) / (R * R) : 0;
+  std::vector<LoadVector> variances;
+  for (const BalanceData& d : data) {
+    const NoiseCovariance noise = WithinHoldNoise(d, options.noise);
+    LoadVector v = noise.Variances();
+    for (int c = 0; c < kNumLoadChannels; ++c) {
+      if (noise.channel[c].source == NoiseSource::kAbsent) v[c] = ProvisionalVariance(d, c);
+    }
+    variances.push_back(v);
+  }
+  AddInformationMatrix(model, Weighted(data, variances), KfOptionsFromConfig(config, options).scale,
+                       options.excitation, &report);
+  return report;
 }
 
 LinearBaselineResult RunLinearBaseline(const ParameterSet& config,
@@ -168,8 +193,8 @@ LinearBaselineResult RunLinearBaseline(const ParameterSet& config,
   // 4b. Residual fallback: a first fit with provisional weights, then the
   // residual variance of each channel without a within-hold estimate.
   if (need_residuals) {
-    const BatchLeastSquaresSummary first = SolveBatchLeastSquares(
-        result.model, Weighted(estimation, variances), result.kf_options);
+    const BatchLeastSquaresSummary first =
+        SolveBatchLeastSquares(result.model, Weighted(estimation, variances), result.kf_options);
     if (!first.usable) throw ComputationError("linear_kf first pass: " + first.message);
     LoadVector total{};
     for (const BalanceData& d : estimation) {
@@ -197,9 +222,9 @@ LinearBaselineResult RunLinearBaseline(const ParameterSet& config,
   result.std_from_filter = result.kf.covariance.diagonal().cwiseSqrt();
   result.estimate.head<kNumTheta>() = result.kf.estimate;
   result.estimate[kPsiAlpha] = result.thrust_map.alpha;
-  result.covariance = PropagateMapUncertainty(result.model, weighted, result.thrust_map,
-                                              result.kf.estimate, result.kf.covariance,
-                                              result.kf_options);
+  result.covariance =
+      PropagateMapUncertainty(result.model, weighted, result.thrust_map, result.kf.estimate,
+                              result.kf.covariance, result.kf_options);
 
   // 7. Cz two ways (eqs. 64-65), with first-order stds from the joint covariance.
   {
@@ -236,54 +261,57 @@ LinearBaselineResult RunLinearBaseline(const ParameterSet& config,
 
   // Notes: what the method assumed and what a reader must know to judge it.
   std::vector<std::string>& notes = result.notes;
-  notes.push_back("d = " + Num(result.d) + " m is taken from the vehicle config, not estimated "
+  notes.push_back("d = " + Num(result.d) +
+                  " m is taken from the vehicle config, not estimated "
                   "(model.md decision 6): L and M measure d*beta, so a wrong d biases beta, and "
                   "through the collinear X31/X33 also Cz_beta, in proportion.");
-  notes.push_back("sigma comes from the interference map of the same logs (paper Fig. 9; "
-                  "model.md decision 6), not from the config's interference model; " +
-                  std::to_string(result.thrust_map.measured_cells) + " grid cells measured, " +
-                  std::to_string(result.thrust_map.filled_cells) +
-                  " filled from the parametric fit (sigma0).");
+  notes.push_back(
+      "sigma comes from the interference map of the same logs (paper Fig. 9; "
+      "model.md decision 6), not from the config's interference model; " +
+      std::to_string(result.thrust_map.measured_cells) + " grid cells measured, " +
+      std::to_string(result.thrust_map.filled_cells) + " filled from the parametric fit (sigma0).");
   notes.push_back("alpha and beta of the thrust map assume Cz = " + Num(result.Cz_assumed) +
                   " from the config (the paper takes Cz from the literature); a wrong Cz scales "
                   "them by (1 - Cz_true k)/(1 - Cz k), k = S_s/S_prop = " +
                   Num(result.area_ratio) + ".");
-  notes.push_back("Cz_alpha / alpha reproduces the assumed Cz by construction (alpha came from "
-                  "the thrust map with that Cz), so it checks consistency, not Cz; "
-                  "Cz_beta / beta does not depend on the assumed Cz but on d (through beta). "
-                  "The parameter Cz reported is Cz_beta / beta.");
-  notes.push_back(std::string("Cz from Cz_alpha/alpha = ") + Num(result.Cz_from_alpha.value) +
-                  " +- " + Num(result.Cz_from_alpha.std, "%.2g") + ", from Cz_beta/beta = " +
-                  Num(result.Cz_from_beta.value) + " +- " +
-                  Num(result.Cz_from_beta.std, "%.2g") + ": " +
-                  (result.Cz_disagree
-                       ? "they DISAGREE (" + Num(result.Cz_difference_in_std, "%.3g") +
-                             " std apart): the assumed Cz or d is wrong, or the model misses "
-                             "an effect"
-                       : "they agree (" + Num(result.Cz_difference_in_std, "%.3g") +
-                             " std apart)") +
-                  ".");
+  notes.push_back(
+      "Cz_alpha / alpha reproduces the assumed Cz by construction (alpha came from "
+      "the thrust map with that Cz), so it checks consistency, not Cz; "
+      "Cz_beta / beta does not depend on the assumed Cz but on d (through beta). "
+      "The parameter Cz reported is Cz_beta / beta.");
+  notes.push_back(
+      std::string("Cz from Cz_alpha/alpha = ") + Num(result.Cz_from_alpha.value) + " +- " +
+      Num(result.Cz_from_alpha.std, "%.2g") + ", from Cz_beta/beta = " +
+      Num(result.Cz_from_beta.value) + " +- " + Num(result.Cz_from_beta.std, "%.2g") + ": " +
+      (result.Cz_disagree
+           ? "they DISAGREE (" + Num(result.Cz_difference_in_std, "%.3g") +
+                 " std apart): the assumed Cz or d is wrong, or the model misses "
+                 "an effect"
+           : "they agree (" + Num(result.Cz_difference_in_std, "%.3g") + " std apart)") +
+      ".");
   if (std::isfinite(result.beta_from_xy.value)) {
     const double beta = result.kf.estimate[kThetaBeta];
     const double diff = beta - result.beta_from_xy.value;
     const double diff_std = std::hypot(result.std_from_filter[kThetaBeta], result.beta_from_xy.std);
-    notes.push_back(
-        "X and Y (not used in the estimation, eqs. 61-62) give beta = " +
-        Num(result.beta_from_xy.value) + " +- " + Num(result.beta_from_xy.std, "%.2g") +
-        " independently of d; the filter's beta = " + Num(beta) + " (from L, M with d = " +
-        Num(result.d) + " m)" +
-        (std::fabs(diff) > 3 * diff_std
-             ? ": they differ by " + Num(100 * diff / result.beta_from_xy.value, "%.3g") +
-                   " %, which points to d = " + Num(result.implied_d) +
-                   " m rather than the config's (or to an effect on X, Y or L, M)."
-             : ": consistent."));
+    notes.push_back("X and Y (not used in the estimation, eqs. 61-62) give beta = " +
+                    Num(result.beta_from_xy.value) + " +- " + Num(result.beta_from_xy.std, "%.2g") +
+                    " independently of d; the filter's beta = " + Num(beta) +
+                    " (from L, M with d = " + Num(result.d) + " m)" +
+                    (std::fabs(diff) > 3 * diff_std
+                         ? ": they differ by " +
+                               Num(100 * diff / result.beta_from_xy.value, "%.3g") +
+                               " %, which points to d = " + Num(result.implied_d) +
+                               " m rather than the config's (or to an effect on X, Y or L, M)."
+                         : ": consistent."));
   }
-  notes.push_back("std of each Kalman estimate includes the thrust map's uncertainty (alpha, "
-                  "beta, sigma map) propagated to first order; std_from_filter is the filter's "
-                  "own P, conditional on alpha and sigma as in the paper.");
+  notes.push_back(
+      "std of each Kalman estimate includes the thrust map's uncertainty (alpha, "
+      "beta, sigma map) propagated to first order; std_from_filter is the filter's "
+      "own P, conditional on alpha and sigma as in the paper.");
   if (options.process_noise > 0) {
-    notes.push_back("Q > 0: the filter tracks drifting parameters and its P is not the batch "
-                    "covariance; the propagated std assumes Q = 0.");
+    notes.push_back(
+        "Q > 0: the filter tracks drifting parameters and its P is not the batch "
+        "covariance; the propagated std assumes Q = 0.");
   }
   for (size_t i = 0; i < estimation.size(); ++i) {
     bool residual = false, floored = false;
@@ -295,15 +323,20 @@ LinearBaselineResult RunLinearBaseline(const ParameterSet& config,
       notes.push_back("R for " + estimation[i].source +
                       " is the residual variance of the fitted model: " +
                       (estimation[i].steady_points ? "a steady-point log" : "a log") +
-                      " has no within-hold spread to estimate it from (eqs. 83-84).");
+                      " has no within-hold spread to estimate it from (eqs. 83-84). For Z it "
+                      "also holds the error of the sigma map, made from the same points, so it "
+                      "overestimates the noise (by ~1.5x when each map cell has one point) and "
+                      "the stds that depend on it are conservative.");
     }
     if (floored) {
-      notes.push_back("R for " + estimation[i].source + " was floored for some channels "
+      notes.push_back("R for " + estimation[i].source +
+                      " was floored for some channels "
                       "(noise-free or nearly so).");
     }
   }
-  notes.push_back("Relative errors: |measured - model| / max|measured| of the channel over the "
-                  "evaluated data; per sample (noise included) and per hold mean.");
+  notes.push_back(
+      "Relative errors: |measured - model| / max|measured| of the channel over the "
+      "evaluated data; per sample (noise included) and per hold mean.");
   return result;
 }
 

@@ -38,12 +38,12 @@ struct LinearBaselineOptions {
   NoiseCovarianceOptions noise;
   ExcitationOptions excitation;
   double process_noise = 0;  // Q, see LinearKfOptions (paper: 0)
-  double prior_std = 1e4;    // diffuse prior, in parameter scales
+  double prior_std = 1e3;    // diffuse prior, in parameter scales (LinearKfOptions)
   int history_stride = 1;    // Kalman history: every n-th update
   bool IsValid(std::string* why) const;
 };
 
-struct Estimate {
+struct BaselineEstimate {
   double value = std::numeric_limits<double>::quiet_NaN();
   double std = std::numeric_limits<double>::quiet_NaN();
 };
@@ -68,12 +68,12 @@ struct LinearBaselineResult {
   ThetaVector std_from_filter = ThetaVector::Zero();
 
   // Cz two ways (eqs. 64-65) and whether they disagree (beyond 3 std of the difference).
-  Estimate Cz_from_alpha, Cz_from_beta;
+  BaselineEstimate Cz_from_alpha, Cz_from_beta;
   double Cz_difference_in_std = 0;
   bool Cz_disagree = false;
   // Diagnostic: beta from X and Y alone (eqs. 61-62, not used in estimation,
   // independent of d), and the d it implies with the filter's beta.
-  Estimate beta_from_xy;
+  BaselineEstimate beta_from_xy;
   double implied_d = std::numeric_limits<double>::quiet_NaN();
 
   // Model outputs against the measured loads. The reconstructions point into
@@ -83,7 +83,7 @@ struct LinearBaselineResult {
 
   std::vector<std::string> notes;
 
-  Estimate Parameter(int psi_index) const {
+  BaselineEstimate Parameter(int psi_index) const {
     return {estimate[psi_index], std::sqrt(covariance(psi_index, psi_index))};
   }
 };
@@ -98,9 +98,19 @@ LinearBaselineResult RunLinearBaseline(const ParameterSet& config,
                                        const std::vector<BalanceData>& validation,
                                        const LinearBaselineOptions& options = {});
 
+// The excitation check alone, as `coaxid check` runs it on any balance logs:
+// Lemma 1 and the swashplate condition, then eqs. 73-74 with sigma = 1 (no
+// thrust map needed: sigma only rescales rows by 0.8-1), d and the scales
+// from the config, R from the holds (a provisional 1 % of the channel's rms
+// where the holds have no spread).
+ExcitationReport CheckBalanceExcitation(const ParameterSet& config,
+                                        const std::vector<BalanceData>& data,
+                                        const LinearBaselineOptions& options = {});
+
 // The filter's scaling and prior from the config: Theta_0 = (beta, Cz alpha,
 // Cz beta, gamma1, gamma2) at their nominal values, scales from the
 // parameters' scales.
-LinearKfOptions KfOptionsFromConfig(const ParameterSet& config, const LinearBaselineOptions& options);
+LinearKfOptions KfOptionsFromConfig(const ParameterSet& config,
+                                    const LinearBaselineOptions& options);
 
 }  // namespace coaxid

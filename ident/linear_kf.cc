@@ -1,12 +1,10 @@
 #include "ident/linear_kf.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/QR>
 #include <cmath>
 #include <string>
 #include <vector>
-
-#include <Eigen/Cholesky>
-#include <Eigen/QR>
-#include <Eigen/SVD>
 
 namespace coaxid {
 namespace {
@@ -23,8 +21,9 @@ bool NoiseStds(const WeightedBalanceData& d, OutputVector* std_dev, std::string*
     bool has_samples = false;
     for (const BalanceHold& hold : d.data->holds) has_samples = has_samples || hold.count[c] > 0;
     if (has_samples && !(v > 0 && std::isfinite(v))) {
-      *why = d.data->source + ": channel " + LoadChannelName(c) + " has samples but noise variance " +
-             std::to_string(v) + " (must be positive and finite)";
+      *why = d.data->source + ": channel " + LoadChannelName(c) +
+             " has samples but noise variance " + std::to_string(v) +
+             " (must be positive and finite)";
       return false;
     }
     (*std_dev)[r] = has_samples ? std::sqrt(v) : 1.0;
@@ -34,9 +33,8 @@ bool NoiseStds(const WeightedBalanceData& d, OutputVector* std_dev, std::string*
 
 // The whitened, scaled model at a hold: H row r = X_k(channel r) .* scale / std_r,
 // and the offsets of eq. 69 (Z_bar = Z - sigma alpha w1).
-void HoldModel(const LinearBalanceModel& model, const InputVector& input,
-               const ThetaVector& scale, const OutputVector& std_dev, OutputMatrix* H,
-               OutputVector* offset) {
+void HoldModel(const LinearBalanceModel& model, const InputVector& input, const ThetaVector& scale,
+               const OutputVector& std_dev, OutputMatrix* H, OutputVector* offset) {
   const LinearizedLoads lin = model.Linearize(input);
   for (int r = 0; r < kM; ++r) {
     const int c = kEstimationChannels[r];
@@ -130,12 +128,12 @@ LinearKfSummary RunLinearKf(const LinearBalanceModel& model,
             HP * H.transpose() + Eigen::Matrix<double, kM, kM>::Identity();
         const Eigen::LLT<Eigen::Matrix<double, kM, kM>> llt(S);
         if (llt.info() != Eigen::Success) {
-          summary.message = "innovation covariance not positive definite at " + d.source +
-                            " row " + std::to_string(k + 1);
+          summary.message = "innovation covariance not positive definite at " + d.source + " row " +
+                            std::to_string(k + 1);
           return summary;
         }
         const Eigen::Matrix<double, kNumTheta, kM> K = llt.solve(HP).transpose();
-        phi += K * (z - H * phi);  // eq. 81
+        phi += K * (z - H * phi);           // eq. 81
         const ThetaMatrix IKH = I - K * H;  // eq. 82, Joseph form
         P = IKH * P * IKH.transpose() + K * K.transpose() + Q;
         P = 0.5 * (P + P.transpose());
@@ -154,6 +152,7 @@ LinearKfSummary RunLinearKf(const LinearBalanceModel& model,
   if (!last_recorded) record(last_i, last_k);
   summary.estimate = phi.cwiseProduct(scale);
   summary.covariance = scale.asDiagonal() * P * scale.asDiagonal();
+  summary.covariance = 0.5 * (summary.covariance + summary.covariance.transpose()).eval();
   summary.usable = summary.estimate.allFinite() && summary.covariance.allFinite() &&
                    (summary.covariance.diagonal().array() > 0).all();
   if (!summary.usable) summary.message = "the filter's estimate or covariance is not finite";
@@ -213,11 +212,13 @@ BatchLeastSquaresSummary SolveBatchLeastSquares(const LinearBalanceModel& model,
   }
   if (used > kCols) flush();
   const Eigen::Matrix<double, kNumTheta, kNumTheta> R = R_aug.topLeftCorner<kNumTheta, kNumTheta>();
-  const Eigen::JacobiSVD<ThetaMatrix> svd(R);
-  const auto& sv = svd.singularValues();
-  if (!(sv[kNumTheta - 1] > 1e-13 * sv[0])) {
-    summary.message = "the least-squares problem is rank deficient (singular values " +
-                      std::to_string(sv[0]) + " .. " + std::to_string(sv[kNumTheta - 1]) + ")";
+  // Rank: Householder QR of a rank-deficient matrix leaves a (near) zero on
+  // R's diagonal.
+  const ThetaVector diagonal = R.diagonal().cwiseAbs();
+  if (!(diagonal.minCoeff() > 1e-13 * diagonal.maxCoeff())) {
+    summary.message = "the least-squares problem is rank deficient (|R_ii| from " +
+                      std::to_string(diagonal.minCoeff()) + " to " +
+                      std::to_string(diagonal.maxCoeff()) + ")";
     return summary;
   }
   const auto upper = R.triangularView<Eigen::Upper>();
@@ -227,6 +228,7 @@ BatchLeastSquaresSummary SolveBatchLeastSquares(const LinearBalanceModel& model,
   const ThetaMatrix cov_scaled = R_inv * R_inv.transpose();
   summary.estimate = phi.cwiseProduct(scale);
   summary.covariance = scale.asDiagonal() * cov_scaled * scale.asDiagonal();
+  summary.covariance = 0.5 * (summary.covariance + summary.covariance.transpose()).eval();
   summary.weighted_rss = R_aug(kNumTheta, kNumTheta) * R_aug(kNumTheta, kNumTheta);
   summary.usable = summary.estimate.allFinite() && summary.covariance.allFinite();
   if (!summary.usable) summary.message = "the least-squares solution is not finite";

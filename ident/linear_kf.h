@@ -29,10 +29,13 @@ namespace coaxid {
 
 struct LinearKfOptions {
   ThetaVector initial = ThetaVector::Zero();  // Theta_0
-  ThetaVector scale = ThetaVector::Ones();    // typical magnitude of each parameter (units of Theta)
+  ThetaVector scale = ThetaVector::Ones();  // typical magnitude of each parameter (units of Theta)
   // Diffuse prior: P_0 = diag((prior_std * scale)^2). Infinite: no prior
-  // (batch route only; the filter needs a finite P_0).
-  double prior_std = 1e4;
+  // (batch route only; the filter needs a finite P_0). The covariance form
+  // loses about eps * prior_std^2 * (per-sample information) of P to
+  // round-off on the first updates, so a prior far more diffuse than needed
+  // costs accuracy: 1e3 scales weighs ~1e-9 of the data's information here.
+  double prior_std = 1e3;
   // Q = process_noise * diag(scale^2) added at every update (eq. 66); 0 as
   // the paper. Dimensionless: the variance of the per-sample random walk of
   // Theta_i / scale_i.

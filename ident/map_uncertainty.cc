@@ -2,10 +2,9 @@
 
 #include <glog/logging.h>
 
+#include <Eigen/Cholesky>
 #include <cmath>
 #include <vector>
-
-#include <Eigen/Cholesky>
 
 namespace coaxid {
 
@@ -48,8 +47,7 @@ PsiMatrix PropagateMapUncertainty(const LinearBalanceModel& model,
       const double r_bar = hold.mean[kLoadZ] - lin.offset[kLoadZ] - x.dot(theta);
       if (lin.sigma != 0) {
         const ThetaVector h = x / lin.sigma;
-        const ThetaVector g =
-            (n / R) * h * (r_bar - lin.sigma * (model.alpha * w1 + h.dot(theta)));
+        const ThetaVector g = (n / R) * h * (r_bar - lin.sigma * (model.alpha * w1 + h.dot(theta)));
         const SigmaCellWeights w = SigmaWeights(model.sigma, hold.input[0], hold.input[1]);
         for (int j = 0; j < 4; ++j) {
           if (w.weight[j] != 0) G.col(w.cell[j]) += w.weight[j] * g.cwiseProduct(s);

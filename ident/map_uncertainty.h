@@ -23,9 +23,8 @@
 // (batch) solution to first order in the noise.
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "ident/linear_balance_model.h"
 #include "ident/linear_kf.h"

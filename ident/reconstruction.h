@@ -32,8 +32,8 @@ Reconstruction Reconstruct(const BalanceData& data, const LinearBalanceModel& mo
                            const ThetaVector& theta);
 
 struct ChannelFit {
-  FitError error;     // rms, nrmse, count (count 0: channel not measured)
-  double peak = 0;    // max |measured|
+  FitError error;   // rms, nrmse, count (count 0: channel not measured)
+  double peak = 0;  // max |measured|
   double mean_relative_error = 0, max_relative_error = 0;            // per sample
   double hold_mean_relative_error = 0, hold_max_relative_error = 0;  // per hold mean
 };

@@ -48,12 +48,12 @@ struct MapHold {
   int data_index = 0;  // which BalanceData
   int hold_index = 0;  // which hold of it
   MapHoldRole role = MapHoldRole::kStopped;
-  double omega1 = 0, omega2 = 0;  // rad/s
-  double Z = 0;       // mean Z over the hold [N]
-  int count = 0;      // samples of Z
-  double Z_std = 0;   // within-hold standard deviation of Z (NaN for one sample)
+  double omega1 = 0, omega2 = 0;    // rad/s
+  double Z = 0;                     // mean Z over the hold [N]
+  int count = 0;                    // samples of Z
+  double Z_std = 0;                 // within-hold standard deviation of Z (NaN for one sample)
   double sigma = 0, sigma_std = 0;  // coaxial holds: the map's sigma; NaN otherwise
-  int cell = -1;      // coaxial holds: index in the sigma table
+  int cell = -1;                    // coaxial holds: index in the sigma table
   // Derivative of the quantity this hold determines with respect to its mean
   // Z: d alpha / dZ (upper only), d beta / dZ (lower only), d sigma_cell / dZ
   // (coaxial); 0 for a stopped hold. [1/(rad/s)^2, ..., 1/N]
@@ -70,7 +70,8 @@ struct ThrustMapPoint {
 };
 
 enum class SigmaCellSource { kStopped, kMeasured, kParametric };
-const char* SigmaCellSourceName(SigmaCellSource source);  // "stopped", "measured", "parametric_fill"
+const char* SigmaCellSourceName(
+    SigmaCellSource source);  // "stopped", "measured", "parametric_fill"
 
 struct ThrustMap {
   double Cz = 0;             // assumed body coefficient (config)
@@ -79,16 +80,16 @@ struct ThrustMap {
 
   double alpha = 0, alpha_std = 0;  // [N s^2]
   int alpha_holds = 0, alpha_samples = 0;
-  double beta = 0, beta_std = 0;    // [N s^2], lower rotor alone, delta = 0
+  double beta = 0, beta_std = 0;  // [N s^2], lower rotor alone, delta = 0
   int beta_holds = 0, beta_samples = 0;
-  double z_residual_variance = 0;   // per-sample variance of Z about the single-rotor fits [N^2]
+  double z_residual_variance = 0;  // per-sample variance of Z about the single-rotor fits [N^2]
 
   std::vector<MapHold> holds;
   std::vector<ThrustMapPoint> points;  // sorted by omega1, then omega2
 
-  SigmaTable table;                           // the map, bilinear (Fig. 9)
-  std::vector<SigmaCellSource> cell_source;   // per table cell
-  std::vector<double> cell_std;               // per cell (0 for stopped cells)
+  SigmaTable table;                          // the map, bilinear (Fig. 9)
+  std::vector<SigmaCellSource> cell_source;  // per table cell
+  std::vector<double> cell_std;              // per cell (0 for stopped cells)
   int measured_cells = 0, filled_cells = 0;
   double sigma0 = 0, sigma0_std = 0;  // parametric fit
   double sigma_fit_rms = 0;           // rms of (map sigma - parametric sigma) over coaxial holds

@@ -18,6 +18,11 @@
 //   |AD - FD| <= 1e-6 * max_i |FD_ij| + 100 eps S_i / h_j,
 // a million times the truncation error and 100 times the rounding bound, and
 // far below any real Jacobian error (a wrong or swapped column is O(1) wrong).
+#include "dynamics/model_jacobian.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -26,13 +31,9 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-#include <gtest/gtest.h>
-
 #include "core/input_hold.h"
 #include "core/parameters.h"
 #include "dynamics/effects/effect_library.h"
-#include "dynamics/model_jacobian.h"
 #include "dynamics/state.h"
 #include "dynamics/vehicle.h"
 #include "dynamics/vehicle_model.h"
@@ -44,9 +45,7 @@ constexpr double kRelStep = 1e-6;
 constexpr double kRelTol = 1e-6;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-Vehicle Reference() {
-  return LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
-}
+Vehicle Reference() { return LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml"); }
 
 Vehicle AllEffects() {
   Vehicle v = Reference();
@@ -78,8 +77,8 @@ std::vector<Case> NearHoverCases(unsigned seed, int n) {
   std::vector<Case> cases;
   for (int k = 0; k < n; ++k) {
     Case c;
-    c.x << U(-2, 2), U(-2, 2), U(-2, -0.5), U(-0.5, 0.5), U(-0.5, 0.5), U(-0.5, 0.5),
-        U(-0.1, 0.1), U(-0.1, 0.1), U(-M_PI, M_PI), U(-0.3, 0.3), U(-0.3, 0.3), U(-0.3, 0.3);
+    c.x << U(-2, 2), U(-2, 2), U(-2, -0.5), U(-0.5, 0.5), U(-0.5, 0.5), U(-0.5, 0.5), U(-0.1, 0.1),
+        U(-0.1, 0.1), U(-M_PI, M_PI), U(-0.3, 0.3), U(-0.3, 0.3), U(-0.3, 0.3);
     c.input = {150.0 + U(-10, 10), 164.0 + U(-10, 10), U(-0.05, 0.05), U(-0.05, 0.05)};
     cases.push_back(c);
   }
@@ -178,15 +177,12 @@ TEST(ModelJacobianTest, AllEffectsMatchCentralDifferences) {
 TEST(ModelJacobianTest, ParameterSubsetInAnyOrder) {
   const Vehicle v = AllEffects();
   const Eigen::VectorXd theta = v.parameters.Values();
-  const std::vector<int> indices = {kIzz,
-                                    v.parameters.IndexOrThrow("cg_offset.y_g"),
-                                    kAlpha,
-                                    v.parameters.IndexOrThrow("wind.wn"),
-                                    kHubDistance,
-                                    v.parameters.IndexOrThrow("gyroscopic.J_r"),
-                                    kCx,
-                                    v.parameters.IndexOrThrow("wake_interference.k_Q"),
-                                    kGamma2};
+  const std::vector<int> indices = {
+      kIzz,         v.parameters.IndexOrThrow("cg_offset.y_g"),
+      kAlpha,       v.parameters.IndexOrThrow("wind.wn"),
+      kHubDistance, v.parameters.IndexOrThrow("gyroscopic.J_r"),
+      kCx,          v.parameters.IndexOrThrow("wake_interference.k_Q"),
+      kGamma2};
   std::vector<std::string> names;
   for (int i : indices) names.push_back(v.parameters[i].name);
   const Case c = NearHoverCases(3003u, 1)[0];

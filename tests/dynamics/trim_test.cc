@@ -11,19 +11,20 @@
 // order one or more (dZ/domega ~ 0.03 N s, g for an angle), so they hold to
 // ~1e-10; we allow 1e-8 relative (angles 1e-9 rad). The model's smoothings
 // (wake radicand ~45 m^2/s^2, airspeed ~7 m/s) shift the trim by ~1e-14.
-#include <cmath>
-#include <map>
-#include <string>
+#include "dynamics/trim.h"
+
+#include <gtest/gtest.h>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <gtest/gtest.h>
+#include <cmath>
+#include <map>
+#include <string>
 
 #include "core/input_hold.h"
 #include "core/parameters.h"
 #include "dynamics/rigid_body.h"
 #include "dynamics/state.h"
-#include "dynamics/trim.h"
 #include "dynamics/vehicle.h"
 
 namespace coaxid {
@@ -33,9 +34,7 @@ constexpr double kEquilibriumTol = 1e-9;
 constexpr double kInputRel = 1e-8;
 constexpr double kAngleTol = 1e-9;
 
-Vehicle Reference() {
-  return LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
-}
+Vehicle Reference() { return LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml"); }
 
 Vehicle With(const Vehicle& base, const std::string& effect,
              const std::map<std::string, double>& values) {
@@ -76,8 +75,7 @@ void ClosedFormHover(const Eigen::VectorXd& th, double* omega1, double* omega2) 
   const double ratio = std::sqrt(th[kGamma1] / -th[kGamma2]);  // omega2 / omega1
   const double sigma = Sigma(th[kSigma0], 1.0, ratio);
   const double mg = th[kMass] * th[kGravity];
-  const double w1 =
-      -mg / (sigma * BodyForceFactor(th) * (th[kAlpha] + th[kBeta] * ratio * ratio));
+  const double w1 = -mg / (sigma * BodyForceFactor(th) * (th[kAlpha] + th[kBeta] * ratio * ratio));
   *omega1 = std::sqrt(w1);
   *omega2 = ratio * *omega1;
 }
@@ -187,11 +185,10 @@ void CheckWindTrim(double heading, double expect_theta_sign, double expect_phi_s
   const double S_s = M_PI * th[kBodyRadius] * th[kBodyRadius];
   const Eigen::Matrix3d R_EB = BodyToEarth(phi, theta, heading);
   const Eigen::Vector3d wind_B = R_EB.transpose() * wind_E;
-  const Eigen::Vector3d V(wind_B[0], wind_B[1],
-                          std::sqrt(-2 * Z_T / (rho * S_prop)) + wind_B[2]);
-  const Eigen::Vector3d f_body = 0.5 * rho * V.norm() *
-                                 Eigen::Vector3d(S_c * th[kCx] * V[0], S_c * th[kCy] * V[1],
-                                                 S_s * th[kCz] * V[2]);
+  const Eigen::Vector3d V(wind_B[0], wind_B[1], std::sqrt(-2 * Z_T / (rho * S_prop)) + wind_B[2]);
+  const Eigen::Vector3d f_body =
+      0.5 * rho * V.norm() *
+      Eigen::Vector3d(S_c * th[kCx] * V[0], S_c * th[kCy] * V[1], S_s * th[kCz] * V[2]);
   const double mg = th[kMass] * th[kGravity];
   const Eigen::Vector3d weight_B =
       mg * Eigen::Vector3d(-std::sin(theta), std::cos(theta) * std::sin(phi),

@@ -1,0 +1,76 @@
+// Forward-mode automatic differentiation of the one templated model with
+// ceres::Jet, a chunk of derivative directions at a time (like Ceres'
+// DynamicAutoDiffCostFunction): the only way Jacobians are made in coaxid
+// (STYLE.md, item 3). Used for the state derivative (model_jacobian.h) and
+// the output models (outputs.h).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Core>
+#include <ceres/jet.h>
+
+namespace coaxid {
+
+// Directions per pass, measured with bench/model_bench.cc (Jacobians with 12
+// unknowns): with AVX (the default -march=native build) Eigen vectorises a
+// Jet<double, 8> fully and 8-wide passes win (1.1 us against 1.6 us for
+// 16-wide); without it a Jet evaluation costs about the same for 8 and 16
+// directions, so 16-wide passes win (4.5 us against 8.2 us).
+#ifdef __AVX__
+inline constexpr int kAutodiffChunk = 8;
+#else
+inline constexpr int kAutodiffChunk = 16;
+#endif
+
+// f(theta, x, y) is a generic callable (templated on the scalar) computing ny
+// outputs y from the full parameter vector theta and nx variables x. Returns
+// y (optional), dy/dx (ny x nx, optional) and dy/dtheta[k] for k in
+// parameter_indices (ny x P, optional). Returns false if any value is not
+// finite.
+template <typename F>
+bool AutodiffJacobian(const F& f, const Eigen::VectorXd& theta, const double* x, int nx, int ny,
+                      const std::vector<int>& parameter_indices, double* y, Eigen::MatrixXd* dydx,
+                      Eigen::MatrixXd* dydp) {
+  using Jet = ceres::Jet<double, kAutodiffChunk>;
+  const int nx_dirs = dydx ? nx : 0;
+  const int np_dirs = dydp ? static_cast<int>(parameter_indices.size()) : 0;
+  const int num_directions = nx_dirs + np_dirs;
+  if (dydx) dydx->resize(ny, nx);
+  if (dydp) dydp->resize(ny, np_dirs);
+
+  std::vector<Jet> theta_jet(theta.size()), x_jet(nx), y_jet(ny);
+  int first = 0;
+  do {  // at least one pass, also to compute y when no derivative is asked
+    for (int i = 0; i < theta.size(); ++i) theta_jet[i] = Jet(theta[i]);
+    for (int i = 0; i < nx; ++i) x_jet[i] = Jet(x[i]);
+    const int last = std::min(first + kAutodiffChunk, num_directions);
+    for (int dir = first; dir < last; ++dir) {
+      if (dir < nx_dirs) {
+        x_jet[dir].v[dir - first] = 1.0;
+      } else {
+        theta_jet[parameter_indices[dir - nx_dirs]].v[dir - first] = 1.0;
+      }
+    }
+    f(theta_jet.data(), x_jet.data(), y_jet.data());
+    for (int row = 0; row < ny; ++row) {
+      if (!std::isfinite(y_jet[row].a)) return false;
+      if (y && first == 0) y[row] = y_jet[row].a;
+      for (int dir = first; dir < last; ++dir) {
+        const double value = y_jet[row].v[dir - first];
+        if (!std::isfinite(value)) return false;
+        if (dir < nx_dirs) {
+          (*dydx)(row, dir) = value;
+        } else {
+          (*dydp)(row, dir - nx_dirs) = value;
+        }
+      }
+    }
+    first = last;
+  } while (first < num_directions);
+  return true;
+}
+
+}  // namespace coaxid

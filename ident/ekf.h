@@ -1,0 +1,215 @@
+// Extended Kalman filter on the 12 states augmented with the free parameters,
+// from flight logs: the recursive estimator for long logs and online use, and
+// a second opinion on output-error (issue 5).
+//
+// Model (ident/ekf_model.h): continuous-discrete EKF on z = [x; p], p the
+// free parameters in scaled coordinates (value / scale) as random walks (the
+// paper's eq. 66 with the nonlinear 6-DoF model):
+//   xdot = f(x, theta(p), u) + w_x,  pdot = w_p,  E[w w^T] = diag(q_x, q_p) delta,
+//   y_k = h(x_k, theta(p), u_k) + v_k,  E[v v^T] = R = diag(noise std^2).
+// Per log row k >= 1:
+//   predict  CVODE over the zero-order-hold interval [t_{k-1}, t_k) with input
+//            u_{k-1}; P <- Phi P Phi^T + Qd (Phi, Qd: ekf_model.h);
+//   update   with the channels row k holds (NaN skipped, so channels may have
+//            different rates and rows may be irregular): innovation
+//            nu = y - h(x, theta, u_k) (angles wrapped to (-pi, pi]),
+//            S = H P H^T + R with each S_ii floored at R_ii, Cholesky of S
+//            (never an inverse), K = P H^T S^{-1}, and the Joseph form
+//            P <- (I - K H) P (I - K H)^T + K R K^T, symmetrised; parameters
+//            leaving their bounds are projected back onto them (counted).
+// Row 0 initialises the state (P0 = R for the channels it holds; unmeasured
+// states from EkfOptions) and is not used again. The parameters start from
+// the parameter set's values (the config, or an output-error report) with the
+// std of EkfOptions. Several logs are chained: each restarts the states from
+// its first row and carries the parameters (mean and covariance).
+//
+// Scale (model.md, decision 8): flight logs fix only ratios of d, gamma1,
+// gamma2, Ixx, Iyy, Izz (and moment-type effect parameters). When every
+// member of that group is free, the default (ScaleAnchor::kHubDistance) holds
+// d at its config value and says so; the others are then estimates relative
+// to that d (the ratios are reported with their std). ScaleAnchor::kNone
+// augments them all: the filter then finds the undetermined direction in its
+// final covariance (ekf_identifiability.h), reports it, and marks the
+// parameters along it as not separately identifiable (no std is invented).
+//
+// Optional Rauch-Tung-Striebel smoother (rts_smoother.h) over the whole chain:
+// smoothed states and parameters at every row.
+//
+// Failures (CVODE, a covariance that is not positive definite, non-finite
+// values, or divergence: the normalised innovation squared per degree of
+// freedom above EkfOptions::divergence_nis over a window) make the result
+// unusable with the time and reason; they are not thrown (hot numeric code),
+// the caller decides (the CLI turns them into ComputationError, exit 1).
+#pragma once
+
+#include <array>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/parameters.h"
+#include "dynamics/integrator.h"
+#include "dynamics/state.h"
+#include "dynamics/vehicle.h"
+#include "ident/ekf_identifiability.h"
+#include "ident/ekf_model.h"
+#include "ident/estimation_log.h"
+#include "ident/noise_weights.h"
+
+namespace coaxid {
+
+struct EkfOptions {
+  // Continuous process noise, power spectral density per state [(state unit)^2 / s]:
+  // positions m^2/s, velocities (m/s)^2/s, angles rad^2/s, rates (rad/s)^2/s. It
+  // stands for model error; the defaults are small (a velocity random walk of
+  // 0.01 m/s after 1 s) because the model is the paper's full 6-DoF one.
+  std::array<double, kNumStates> state_psd = {1e-8, 1e-8, 1e-8, 1e-4, 1e-4, 1e-4,
+                                              1e-8, 1e-8, 1e-8, 1e-4, 1e-4, 1e-4};
+  // Random walk of the scaled parameters [(scaled unit)^2 / s]: 1e-10 lets a
+  // parameter wander by 1e-4 of its scale over 100 s (constant in practice,
+  // but never a singular process covariance). Overrides by name.
+  double parameter_psd = 1e-10;
+  std::map<std::string, double> parameter_psd_by_name;
+  // Initial std of each free parameter, in scaled units (0.5: half the
+  // parameter's typical magnitude, the config's `scale`). Overrides by name,
+  // in the parameter's own units (e.g. from an output-error report).
+  double initial_parameter_std = 0.5;
+  std::map<std::string, double> initial_parameter_std_by_name;
+  // Initial std of states the first row does not hold (their value: 0).
+  double initial_position_std = 10.0;  // m
+  double initial_velocity_std = 1.0;   // m/s
+  double initial_angle_std = 0.5;      // rad
+  double initial_rate_std = 1.0;       // rad/s
+
+  // Filter coordinates of the parameters: log(|theta| / scale) for every
+  // parameter whose bounds keep one sign (all of model.md's unknowns), else
+  // theta / scale. See the header comment.
+  bool logarithmic_parameters = true;
+
+  EkfTransitionMethod transition = EkfTransitionMethod::kLinearised;
+  // Longest interval linearised at once [s]; longer ones are split.
+  double max_substep_s = 0.01;
+  // CVODE for the mean (and the sensitivities with kSensitivities).
+  IntegratorOptions integrator = DefaultIntegrator();
+
+  bool smoother = true;
+  // Keep the parameters' mean at its initial value (the covariance is still
+  // updated): the covariance pass, linearised at fixed parameters.
+  bool freeze_parameter_mean = false;
+
+  enum class ScaleAnchor { kHubDistance, kNone };
+  ScaleAnchor scale_anchor = ScaleAnchor::kHubDistance;
+
+  // Consistency statistics skip the first nis_burn_in_s of each log [s].
+  double nis_burn_in_s = 5.0;
+  // Divergence: mean NIS per degree of freedom over the last divergence_window_s
+  // above this (expected 1).
+  double divergence_nis = 1000.0;
+  double divergence_window_s = 1.0;
+  // A direction counts as undetermined if the logs reduced its variance by
+  // less than this factor (final / prior variance above it).
+  double undetermined_variance_ratio = 0.5;
+
+  // Progress: called every progress_every_rows rows (rows done, rows in all).
+  std::function<void(long, long)> progress;
+  long progress_every_rows = 2000;
+
+  bool IsValid(std::string* why) const;
+
+  static IntegratorOptions DefaultIntegrator() {
+    IntegratorOptions o;
+    o.relative_tolerance = 1e-6;
+    o.absolute_tolerance = 1e-8;
+    o.sensitivity_error_control = false;
+    return o;
+  }
+};
+
+// Consistency of one channel's (or all channels') innovations: the mean
+// normalised innovation squared per degree of freedom and its two-sided 95 %
+// band under the chi-square law (a consistent filter: mean 1).
+struct NisStatistic {
+  std::string channel;   // a channel name, or "all"
+  long dof = 0;          // degrees of freedom summed (samples for one channel)
+  double mean = 0;       // sum NIS / dof
+  double lower = 0, upper = 0;  // 95 % band of that mean
+  double innovation_rms = 0;    // one-step-ahead prediction error (channel only)
+  bool consistent() const { return dof > 0 && mean >= lower && mean <= upper; }
+};
+// [lower, upper] of sum / dof for a chi-square(dof) sum, two-sided
+// `confidence` (Wilson-Hilferty; relative error < 1e-3 for dof >= 10).
+std::pair<double, double> ChiSquareMeanBand(double dof, double confidence = 0.95);
+
+struct EkfLogHistory {
+  std::string source, name;
+  std::vector<double> times;
+  std::vector<int> channels;               // FlightChannel of each measured column
+  std::vector<std::string> channel_names;
+  Eigen::MatrixXd measured;                // rows x channels (NaN missing): the log's values
+  // Rows x 12.
+  Eigen::MatrixXd filtered_states, filtered_state_std;
+  Eigen::MatrixXd smoothed_states, smoothed_state_std;  // empty without the smoother
+  // Rows x np, physical units.
+  Eigen::MatrixXd parameters, parameter_std;
+  Eigen::MatrixXd smoothed_parameters, smoothed_parameter_std;
+  // Rows x channels: innovation (NaN where not measured / row 0) and sqrt(S_ii).
+  Eigen::MatrixXd innovations, innovation_std;
+  std::vector<double> nis;  // per row, NaN where no update
+  std::vector<int> nis_dof;
+};
+
+struct EkfResult {
+  bool usable = false;
+  std::string failure;  // why not usable (with the time)
+  double failure_time = 0;
+
+  // Every parameter, the estimates written back; `estimated` as used (d is
+  // not estimated when the scale anchor held it).
+  ParameterSet parameters;
+  // The free (augmented) parameters in filter order.
+  std::vector<std::string> free_names;
+  std::vector<int> free_indices;
+  Eigen::VectorXd scales;
+  Eigen::VectorXd estimate, estimate_std;  // physical units
+  Eigen::MatrixXd covariance;              // final, scaled coordinates (np x np)
+  Eigen::MatrixXd prior_covariance;        // scaled
+  std::string estimates_from;              // "filtered at the end of the last log" (= smoothed there)
+
+  // Identifiability (ekf_identifiability.h).
+  ScaleDirection scale;
+  std::string anchored;  // the parameter held to fix the scale ("d"), or empty
+  std::vector<UndeterminedDirection> undetermined;
+  std::vector<bool> identifiable;  // per free parameter
+  std::vector<ScaleRatio> ratios;
+
+  std::vector<EkfLogHistory> logs;
+  std::vector<NisStatistic> channel_nis;  // after the burn-in
+  NisStatistic total_nis;
+  // Per free parameter: the time (from the start of its log chain) after
+  // which the filtered estimate stays within 3 final std of its final value.
+  std::vector<double> settled_after_s;
+  long clamped = 0;  // projections onto bounds
+  // Log-likelihood of the innovations (prediction-error form, every update):
+  // -1/2 sum_k (nu_k^T S_k^-1 nu_k + log det S_k + m_k log 2 pi).
+  double log_likelihood = 0;
+  std::vector<std::string> notes;
+
+  // Effort.
+  long rows = 0, updates = 0;
+  double propagation_s = 0, update_s = 0, smoother_s = 0, total_s = 0;
+  EkfPropagator::Counters propagation;
+  Integrator::Stats integrator;
+};
+
+// Runs the filter (and smoother) over flight logs in order. vehicle: model
+// and parameters (values = initial estimates, `estimated` = which are
+// augmented). noise: measurement noise std of every channel the logs hold.
+// Throws InputError if options are invalid, a log is not a flight log, or a
+// channel has no noise level; numerical failures give usable = false.
+EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
+                 const NoiseWeights& noise, const EkfOptions& options);
+
+}  // namespace coaxid

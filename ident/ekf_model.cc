@@ -1,0 +1,223 @@
+#include "ident/ekf_model.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <ceres/jet.h>
+#include <glog/logging.h>
+
+#include "dynamics/model_jacobian.h"
+
+namespace coaxid {
+namespace {
+
+// After scaling, |F h|_1 <= this; the 5th-order Taylor series of exp and of
+// phi1(X) = (exp(X) - I) / X then truncates at X^6 / 720 < 4e-7.
+constexpr double kMaxScaledNorm = 0.25;
+
+// Composes the accumulated transition (A, B, Qxx, Qxp) with one more sub-step
+// (a, b, qxx, qxp): Phi <- Phi_j Phi, Qd <- Phi_j Qd Phi_j^T + Qd_j, where the
+// accumulated Qpp (diagonal, qpp_acc) is needed for the cross terms.
+void Compose(const StateMatrix& a, const StateByParameter& b, const StateMatrix& qxx,
+             const StateByParameter& qxp, const Eigen::VectorXd& qpp_acc, EkfTransition* acc) {
+  // Qd first (it needs the old blocks).
+  const StateByParameter AQxp = a * acc->Qxp;   // 12 x np
+  StateMatrix Qxx = a * acc->Qxx * a.transpose();
+  if (b.cols() > 0) {
+    const StateMatrix cross = AQxp * b.transpose();
+    Qxx += cross + cross.transpose();
+    Qxx.noalias() += b * qpp_acc.asDiagonal() * b.transpose();
+  }
+  acc->Qxx = Qxx + qxx;
+  acc->Qxp = AQxp + b * qpp_acc.asDiagonal();
+  acc->Qxp += qxp;
+  acc->B = a * acc->B + b;
+  acc->A = a * acc->A;
+}
+
+}  // namespace
+
+const char* EkfTransitionMethodName(EkfTransitionMethod method) {
+  return method == EkfTransitionMethod::kLinearised ? "linearised" : "sensitivities";
+}
+
+EkfPropagator::EkfPropagator(const VehicleModel& model, const Eigen::VectorXd& theta,
+                             std::vector<int> free_indices, Eigen::VectorXd dtheta_dp,
+                             const Eigen::Matrix<double, kNumStates, 1>& state_psd,
+                             Eigen::VectorXd parameter_psd, EkfTransitionMethod method,
+                             const IntegratorOptions& integrator, double max_substep_s)
+    : model_(model),
+      theta_(theta),
+      free_indices_(std::move(free_indices)),
+      dtheta_dp_(std::move(dtheta_dp)),
+      state_psd_(state_psd),
+      parameter_psd_(std::move(parameter_psd)),
+      method_(method),
+      max_substep_(max_substep_s),
+      ode_(model, theta, free_indices_) {
+  CHECK_EQ(static_cast<int>(free_indices_.size()), dtheta_dp_.size());
+  CHECK_EQ(dtheta_dp_.size(), parameter_psd_.size());
+  CHECK_GT(max_substep_, 0.0);
+  if (method_ == EkfTransitionMethod::kSensitivities) {
+    variational_ = std::make_unique<VariationalSystem>(ode_, true, num_parameters() > 0);
+    IntegratorOptions options = integrator;
+    options.newton = false;  // fixed-point iteration on the augmented system
+    if (!options.sensitivity_error_control) options.error_controlled_states = kNumStates;
+    integrator_ = std::make_unique<Integrator>(*variational_, options);
+    z_.resize(variational_->NumStates());
+  } else {
+    integrator_ = std::make_unique<Integrator>(ode_, integrator);
+    z_.resize(kNumStates);
+  }
+}
+
+void EkfPropagator::SetParameters(const Eigen::VectorXd& free_values,
+                                  const Eigen::VectorXd& dtheta_dp) {
+  CHECK_EQ(free_values.size(), num_parameters());
+  CHECK_EQ(dtheta_dp.size(), num_parameters());
+  for (int k = 0; k < num_parameters(); ++k) theta_[free_indices_[k]] = free_values[k];
+  dtheta_dp_ = dtheta_dp;
+  ode_.SetTheta(theta_);
+}
+
+bool EkfPropagator::Fail(const std::string& why) {
+  error_ = why;
+  return false;
+}
+
+bool EkfPropagator::LinearisedStep(double h, const State& x_a, const State& x_b,
+                                   const InputVector& u, StateMatrix* A, StateByParameter* B) {
+  const State x_mid = 0.5 * (x_a + x_b);
+  ++counters_.jacobians;
+  if (!DerivativeJacobians(model_, theta_, x_mid.data(), u, free_indices_, &dfdx_,
+                           num_parameters() > 0 ? &dfdp_ : nullptr)) {
+    return Fail("model Jacobian not finite");
+  }
+  const StateMatrix F = dfdx_;
+  const int np = num_parameters();
+  StateByParameter G(kNumStates, np);
+  if (np > 0) G = dfdp_ * dtheta_dp_.asDiagonal();
+
+  // exp([[F h, G h], [0, 0]]) = [[exp(X), h phi1(X) G], [0, I]], X = F h,
+  // phi1(X) = I + X/2! + X^2/3! + ... (Horner), with scaling and squaring.
+  const double norm = (F * h).cwiseAbs().colwise().sum().maxCoeff();
+  int squarings = 0;
+  if (norm > kMaxScaledNorm) squarings = static_cast<int>(std::ceil(std::log2(norm / kMaxScaledNorm)));
+  const double hs = std::ldexp(h, -squarings);
+  const StateMatrix X = F * hs;
+  const StateMatrix I = StateMatrix::Identity();
+  const StateMatrix phi1 = I + X / 2 * (I + X / 3 * (I + X / 4 * (I + X / 5 * (I + X / 6))));
+  *A = I + X * phi1;
+  *B = hs * (phi1 * G);
+  for (int s = 0; s < squarings; ++s) {
+    // [[A, B], [0, I]]^2 = [[A^2, A B + B], [0, I]].
+    *B = (*A) * (*B) + *B;
+    *A = (*A) * (*A);
+  }
+  return true;
+}
+
+bool EkfPropagator::Propagate(double t0, double t1, const InputVector& u, const State& x0,
+                              EkfTransition* out) {
+  CHECK(t1 > t0);
+  ++counters_.intervals;
+  const int np = num_parameters();
+  const int substeps = std::max(1, static_cast<int>(std::ceil((t1 - t0) / max_substep_ - 1e-9)));
+  ode_.SetInput(u);
+  out->A.setIdentity();
+  out->B.setZero(kNumStates, np);
+  out->Qxx.setZero();
+  out->Qxp.setZero(kNumStates, np);
+  Eigen::VectorXd qpp_acc = Eigen::VectorXd::Zero(np);
+
+  State x_a = x0;
+  StateMatrix a;
+  StateByParameter b(kNumStates, np);
+  if (method_ == EkfTransitionMethod::kLinearised) {
+    z_ = x0;
+    if (!integrator_->Reset(t0, z_)) return Fail(integrator_->last_error());
+  }
+  for (int j = 0; j < substeps; ++j) {
+    const double ta = t0 + (t1 - t0) * j / substeps;
+    const double tb = j + 1 == substeps ? t1 : t0 + (t1 - t0) * (j + 1) / substeps;
+    const double h = tb - ta;
+    ++counters_.substeps;
+    State x_b;
+    if (method_ == EkfTransitionMethod::kLinearised) {
+      if (!integrator_->AdvanceTo(tb, &z_)) return Fail(integrator_->last_error());
+      x_b = z_;
+      if (!x_b.allFinite()) return Fail("state not finite");
+      if (!LinearisedStep(h, x_a, x_b, u, &a, &b)) return false;
+    } else {
+      // [x; vec([I | 0])], restarted at every sub-step so that each gives its own Phi_j.
+      z_.setZero();
+      z_.head<kNumStates>() = x_a;
+      for (int i = 0; i < kNumStates; ++i) z_[kNumStates + i * kNumStates + i] = 1.0;
+      if (!integrator_->Reset(ta, z_) || !integrator_->AdvanceTo(tb, &z_)) {
+        return Fail(integrator_->last_error());
+      }
+      x_b = z_.head<kNumStates>();
+      if (!z_.allFinite()) return Fail("state or sensitivities not finite");
+      const Eigen::Map<const Eigen::MatrixXd> S(z_.data() + kNumStates, kNumStates,
+                                                kNumStates + np);
+      a = S.leftCols<kNumStates>();
+      if (np > 0) b = S.rightCols(np) * dtheta_dp_.asDiagonal();
+    }
+    // Trapezoidal Qd of this sub-step: h/2 (Phi Qc Phi^T + Qc).
+    StateMatrix qxx = a * state_psd_.asDiagonal() * a.transpose();
+    if (np > 0) qxx.noalias() += b * parameter_psd_.asDiagonal() * b.transpose();
+    qxx.diagonal() += state_psd_;
+    qxx *= 0.5 * h;
+    StateByParameter qxp(kNumStates, np);
+    if (np > 0) qxp = (0.5 * h) * (b * parameter_psd_.asDiagonal());
+    Compose(a, b, qxx, qxp, qpp_acc, out);
+    qpp_acc += h * parameter_psd_;
+    x_a = x_b;
+  }
+  out->x = x_a;
+  if (!out->A.allFinite() || !out->B.allFinite() || !out->Qxx.allFinite()) {
+    return Fail("state transition matrix not finite");
+  }
+  return true;
+}
+
+bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& theta,
+                              const std::vector<int>& free_indices,
+                              const Eigen::VectorXd& dtheta_dp, const State& x,
+                              const InputVector& u,
+                              Eigen::Matrix<double, kNumFlightChannels, 1>* y,
+                              Eigen::Matrix<double, 3, Eigen::Dynamic>* H_acc) {
+  FlightOutputs(model, theta.data(), x.data(), u.data(), y->data());
+  if (!y->allFinite()) return false;
+  if (H_acc == nullptr) return true;
+  // Derivative directions kChunk at a time (as dynamics/model_jacobian.cc).
+  constexpr int kChunk = 16;
+  using Jet = ceres::Jet<double, kChunk>;
+  const int np = static_cast<int>(free_indices.size());
+  const int directions = kNumStates + np;
+  H_acc->resize(3, directions);
+  std::vector<Jet> theta_jet(theta.size());
+  Jet x_jet[kNumStates], u_jet[kNumInputs], y_jet[kNumFlightChannels];
+  for (int i = 0; i < kNumInputs; ++i) u_jet[i] = Jet(u[i]);
+  for (int first = 0; first < directions; first += kChunk) {
+    for (int i = 0; i < theta.size(); ++i) theta_jet[i] = Jet(theta[i]);
+    for (int i = 0; i < kNumStates; ++i) x_jet[i] = Jet(x[i]);
+    const int last = std::min(first + kChunk, directions);
+    for (int dir = first; dir < last; ++dir) {
+      if (dir < kNumStates) {
+        x_jet[dir].v[dir - first] = 1.0;
+      } else {
+        theta_jet[free_indices[dir - kNumStates]].v[dir - first] = dtheta_dp[dir - kNumStates];
+      }
+    }
+    FlightOutputs(model, theta_jet.data(), x_jet, u_jet, y_jet);
+    for (int row = 0; row < 3; ++row) {
+      for (int dir = first; dir < last; ++dir) {
+        (*H_acc)(row, dir) = y_jet[kAx + row].v[dir - first];
+      }
+    }
+  }
+  return H_acc->allFinite();
+}
+
+}  // namespace coaxid

@@ -1,0 +1,144 @@
+// The EKF's process and measurement models (ident/ekf.h): one hold interval's
+// transition of the augmented state and the flight outputs with their
+// Jacobian, all from the one templated model (STYLE.md, items 1 and 3).
+//
+// Augmented state z = [x; p]: the 12 states of dynamics/state.h and the np
+// free parameters in scaled coordinates (p_k = theta_k / scale_k,
+// ident/free_parameters.h), modelled as random walks (the paper's eq. 66, here
+// with the nonlinear 6-DoF model):
+//
+//   xdot = f(x, theta(p), u_k) + w_x,   pdot = w_p,
+//   E[w w^T] = Qc delta(t - s),   Qc = diag(q_x (12), q_p (np)).
+//
+// Over one hold interval [t0, t1) (input u_k constant, model.md) the mean is
+// integrated with CVODE and the covariance is carried by
+//
+//   Phi = dz(t1)/dz(t0) = [[A, B], [0, I]],  A = dx1/dx0 (12 x 12), B = dx1/dp (12 x np),
+//   Qd  = int_t0^t1 Phi(t1, s) Qc Phi(t1, s)^T ds.
+//
+// Two ways to get Phi (EkfTransitionMethod):
+//  - kSensitivities: CVODE on the state augmented with its variational
+//    equations (dynamics/variational_system.h, Jacobians by autodiff): A and
+//    B to the integrator's tolerance. About 20 Jacobian evaluations per 5 ms
+//    interval (every right-hand side needs one).
+//  - kLinearised (default): CVODE integrates the state alone; A and B are
+//    exp(Abar h) of the augmented Jacobian Abar = [[F, G], [0, 0]] taken once
+//    per sub-step at the midpoint state x_mid = (x(t0) + x(t1)) / 2 (one
+//    autodiff evaluation). By the Magnus expansion, exp(h Abar(t_mid)) differs
+//    from the exact transition by O(h^3 |dAbar/dt| |Abar|) (the midpoint rule
+//    is second order), i.e. ~1e-6 relative at h = 5 ms for this vehicle
+//    (tests/ident/ekf_test.cc compares both); the mean itself is CVODE's in
+//    both methods. The exponential is a Taylor series to 5th order with
+//    scaling and squaring (|F h| <= 1/4 after scaling: truncation < 1e-6 of a
+//    term that is itself a first-order-accurate linearisation).
+// Intervals longer than max_substep are split into equal sub-steps (one
+// Jacobian each; CVODE is not restarted between them) so that irregular rows
+// and gaps keep the linearisation accurate.
+//
+// Qd of a sub-step of length h is the trapezoidal rule of the integral,
+//   Qd = h/2 (Phi Qc Phi^T + Qc),
+// exact to O(h^3 |Abar|^2 Qc) (relative error ~ (|Abar| h)^2 / 12 < 1e-4 at
+// h = 5 ms; q is a tuning value known to a factor of two at best), and it
+// keeps the leading state-parameter coupling exactly: Qd_xp = B q_p h / 2 =
+// G q_p h^2 / 2 + O(h^3). Sub-steps are composed: Qd <- Phi_j Qd Phi_j^T + Qd_j.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/input_hold.h"
+#include "dynamics/integrator.h"
+#include "dynamics/outputs.h"
+#include "dynamics/state.h"
+#include "dynamics/variational_system.h"
+#include "dynamics/vehicle_model.h"
+#include "dynamics/vehicle_ode.h"
+
+namespace coaxid {
+
+enum class EkfTransitionMethod { kLinearised, kSensitivities };
+// "linearised" / "sensitivities".
+const char* EkfTransitionMethodName(EkfTransitionMethod method);
+
+using StateMatrix = Eigen::Matrix<double, kNumStates, kNumStates>;
+using StateByParameter = Eigen::Matrix<double, kNumStates, Eigen::Dynamic>;
+
+// One interval's transition of z = [x; p] (the parameters' mean is constant).
+struct EkfTransition {
+  State x;             // x(t1)
+  StateMatrix A;       // dx(t1)/dx(t0)
+  StateByParameter B;  // dx(t1)/dp (12 x np), p scaled
+  StateMatrix Qxx;     // blocks of Qd; Qpp = q_p (t1 - t0), diagonal, not stored
+  StateByParameter Qxp;
+};
+
+class EkfPropagator {
+ public:
+  // theta: the full parameter vector (the free entries are overwritten by
+  // SetParameters). free_indices: FreeParameters's; dtheta_dp: the initial
+  // d theta_k / d p_k.
+  // state_psd (12) and parameter_psd (np): the diagonal of Qc.
+  EkfPropagator(const VehicleModel& model, const Eigen::VectorXd& theta,
+                std::vector<int> free_indices, Eigen::VectorXd dtheta_dp,
+                const Eigen::Matrix<double, kNumStates, 1>& state_psd,
+                Eigen::VectorXd parameter_psd, EkfTransitionMethod method,
+                const IntegratorOptions& integrator, double max_substep_s);
+
+  int num_parameters() const { return static_cast<int>(free_indices_.size()); }
+  // The free parameters' values theta_k and d theta_k / d p_k (the filter's
+  // coordinates p: scale_k for scaled coordinates, theta_k for logarithmic ones).
+  void SetParameters(const Eigen::VectorXd& free_values, const Eigen::VectorXd& dtheta_dp);
+  const Eigen::VectorXd& theta() const { return theta_; }
+
+  // x(t1) and Phi, Qd for the interval [t0, t1) with input u held. Returns
+  // false (never throws) if CVODE fails or a value stops being finite; then
+  // last_error() says why.
+  bool Propagate(double t0, double t1, const InputVector& u, const State& x0, EkfTransition* out);
+  const std::string& last_error() const { return error_; }
+
+  struct Counters {
+    long intervals = 0, substeps = 0, jacobians = 0;
+  };
+  const Counters& counters() const { return counters_; }
+  Integrator::Stats integrator_stats() const { return integrator_->stats(); }
+
+ private:
+  // A, B of one sub-step [ta, tb] (state already advanced to x_b).
+  bool LinearisedStep(double h, const State& x_a, const State& x_b, const InputVector& u,
+                      StateMatrix* A, StateByParameter* B);
+  bool Fail(const std::string& why);
+
+  const VehicleModel& model_;
+  Eigen::VectorXd theta_;
+  std::vector<int> free_indices_;
+  Eigen::VectorXd dtheta_dp_;  // d theta_k / d p_k at the current parameters
+  Eigen::Matrix<double, kNumStates, 1> state_psd_;
+  Eigen::VectorXd parameter_psd_;
+  EkfTransitionMethod method_;
+  double max_substep_;
+  VehicleOde ode_;
+  std::unique_ptr<VariationalSystem> variational_;
+  std::unique_ptr<Integrator> integrator_;
+  // Workspace.
+  Eigen::MatrixXd dfdx_, dfdp_;
+  Eigen::VectorXd z_;
+  Counters counters_;
+  std::string error_;
+};
+
+// The 15 flight outputs (dynamics/outputs.h) at (x, u) and, if H_acc is not
+// null, the accelerometer rows' Jacobian with respect to z = [x; p]
+// (3 x (12 + np); dtheta_dp: d theta_k / d p_k), by autodiff of FlightOutputs. The state channels'
+// Jacobian is the identity and is not formed. Returns false if a value is not
+// finite.
+bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& theta,
+                              const std::vector<int>& free_indices,
+                              const Eigen::VectorXd& dtheta_dp, const State& x,
+                              const InputVector& u,
+                              Eigen::Matrix<double, kNumFlightChannels, 1>* y,
+                              Eigen::Matrix<double, 3, Eigen::Dynamic>* H_acc);
+
+}  // namespace coaxid

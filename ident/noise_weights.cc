@@ -1,0 +1,95 @@
+#include "ident/noise_weights.h"
+
+#include <cmath>
+
+#include <glog/logging.h>
+
+namespace coaxid {
+namespace {
+
+struct Accumulator {
+  double sum_squares = 0, magnitude = 0;
+  long count = 0;
+};
+
+NoiseWeights Finish(const std::map<std::string, Accumulator>& acc) {
+  NoiseWeights w;
+  for (const auto& [name, a] : acc) {
+    const double floor = 1e-9 * std::max(a.magnitude, 1e-12);
+    const double std = a.count > 0 ? std::sqrt(a.sum_squares / a.count) : floor;
+    w.std[name] = std::max(std, floor);
+  }
+  return w;
+}
+
+}  // namespace
+
+double NoiseWeights::For(const std::string& channel) const {
+  auto it = std.find(channel);
+  CHECK(it != std.end()) << "no noise level for channel " << channel;
+  return it->second;
+}
+
+NoiseWeights NoiseFromData(const std::vector<EstimationLog>& logs) {
+  std::map<std::string, Accumulator> acc;
+  for (const EstimationLog& log : logs) {
+    // Steady-point balance logs: consecutive rows are different operating points.
+    bool steady = log.kind == LogKind::kBalance;
+    for (int k = 1; k < log.NumRows() && steady; ++k) {
+      steady = log.inputs.input(k) != log.inputs.input(k - 1);
+    }
+    for (int c = 0; c < log.NumChannels(); ++c) {
+      Accumulator& a = acc[log.channel_names[c]];
+      const auto column = log.values.col(c);
+      double mean = 0;
+      int n = 0;
+      for (int k = 0; k < column.size(); ++k) {
+        if (std::isfinite(column[k])) {
+          mean += column[k];
+          ++n;
+          a.magnitude = std::max(a.magnitude, std::fabs(column[k]));
+        }
+      }
+      mean = n > 0 ? mean / n : 0;
+      for (int k = 0; k < column.size(); ++k) {
+        if (steady) {
+          if (std::isfinite(column[k])) {
+            a.sum_squares += (column[k] - mean) * (column[k] - mean);
+            ++a.count;
+          }
+        } else if (k > 0 && std::isfinite(column[k]) && std::isfinite(column[k - 1]) &&
+                   (log.kind == LogKind::kFlight ||
+                    log.inputs.input(k) == log.inputs.input(k - 1))) {
+          // Balance: differences only within a hold (constant loads).
+          const double d = column[k] - column[k - 1];
+          a.sum_squares += 0.5 * d * d;
+          ++a.count;
+        }
+      }
+    }
+  }
+  return Finish(acc);
+}
+
+NoiseWeights NoiseFromResiduals(const std::vector<EstimationLog>& logs,
+                                const std::vector<Eigen::MatrixXd>& residuals) {
+  CHECK_EQ(logs.size(), residuals.size());
+  std::map<std::string, Accumulator> acc;
+  for (size_t i = 0; i < logs.size(); ++i) {
+    for (int c = 0; c < logs[i].NumChannels(); ++c) {
+      Accumulator& a = acc[logs[i].channel_names[c]];
+      for (int k = 0; k < residuals[i].rows(); ++k) {
+        const double r = residuals[i](k, c);
+        const double y = logs[i].values(k, c);
+        if (std::isfinite(r)) {
+          a.sum_squares += r * r;
+          ++a.count;
+        }
+        if (std::isfinite(y)) a.magnitude = std::max(a.magnitude, std::fabs(y));
+      }
+    }
+  }
+  return Finish(acc);
+}
+
+}  // namespace coaxid

@@ -1,0 +1,444 @@
+#include "ident/output_error.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <ceres/ceres.h>
+#include <glog/logging.h>
+
+#include "core/errors.h"
+#include "dynamics/outputs.h"
+#include "ident/free_parameters.h"
+#include "ident/output_error_costs.h"
+
+namespace coaxid {
+
+bool OutputErrorOptions::IsValid(std::string* why) const {
+  auto fail = [why](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (segment_schedule_s.empty()) return fail("segment_schedule_s is empty");
+  for (double s : segment_schedule_s) {
+    if (!(s > 0)) return fail("segment lengths must be positive");
+  }
+  if (max_iterations < 1 || coarse_max_iterations < 1) {
+    return fail("max_iterations must be >= 1");
+  }
+  if (noise_relaxations < 0) return fail("noise_relaxations must be >= 0");
+  if (!(continuity_std > 0)) return fail("continuity_std must be positive");
+  if (huber_threshold < 0) return fail("huber_threshold must be >= 0");
+  if (num_threads < 1) return fail("num_threads must be >= 1");
+  if (balance_rows_per_block < 1) return fail("balance_rows_per_block must be >= 1");
+  return integrator.IsValid(why);
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+double MedianStep(const EstimationLog& log) {
+  std::vector<double> dt;
+  for (int k = 1; k < log.NumRows(); ++k) dt.push_back(log.inputs.time(k) - log.inputs.time(k - 1));
+  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
+  return dt[dt.size() / 2];
+}
+
+// Segment start rows for segments of about `seconds`; the log's last row ends
+// the last segment, which is merged into the one before if shorter than half.
+std::vector<int> SegmentStarts(const EstimationLog& log, double seconds) {
+  const int n = std::max(2, static_cast<int>(std::lround(seconds / MedianStep(log))));
+  const int last_row = log.NumRows() - 1;
+  std::vector<int> starts;
+  for (int s = 0; s < last_row; s += n) starts.push_back(s);
+  if (starts.size() > 1 && last_row - starts.back() < n / 2) starts.pop_back();
+  return starts;
+}
+
+class ProgressCallback : public ceres::IterationCallback {
+ public:
+  ProgressCallback(const OutputErrorOptions& options, std::string stage, Clock::time_point start)
+      : options_(options), stage_(std::move(stage)), start_(start) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    if (options_.progress) {
+      char line[256];
+      std::snprintf(line, sizeof line, "%s: iteration %2d  cost %.6e  |step| %.2e  elapsed %.1f s",
+                    stage_.c_str(), s.iteration, s.cost, s.step_norm, Since(start_));
+      options_.progress(line);
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const OutputErrorOptions& options_;
+  std::string stage_;
+  Clock::time_point start_;
+};
+
+// States a flight log cannot see and the model does not use: held constant on
+// the first segment (position when not logged: nothing in the model depends
+// on x, y; z only through ground effect).
+std::vector<int> UnobservableStates(const EstimationLog& log, const VehicleModel& model) {
+  std::vector<int> out;
+  auto logged = [&](int ch) { return log.ChannelColumn(ch) >= 0; };
+  if (!logged(kX)) out.push_back(kX);
+  if (!logged(kY)) out.push_back(kY);
+  if (!logged(kZ) && !model.EffectEnabled(EffectIndex("ground_effect"))) out.push_back(kZ);
+  return out;
+}
+
+// One assembled Ceres problem for a segment schedule.
+struct Assembly {
+  std::unique_ptr<ceres::Problem> problem;
+  std::vector<FittedSegments> segments;                       // per log
+  std::vector<std::vector<FlightSegmentCost*>> segment_costs;  // per log
+  std::vector<double*> state_blocks;                          // every segment state block
+};
+
+}  // namespace
+
+Eigen::VectorXd InitialStateFromLog(const EstimationLog& log, int row) {
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(kNumStates);
+  for (int s = 0; s < kNumStates; ++s) {
+    const int c = log.ChannelColumn(s);
+    if (c >= 0 && std::isfinite(log.values(row, c))) x[s] = log.values(row, c);
+  }
+  const bool have_velocity = log.ChannelColumn(kU) >= 0 && log.ChannelColumn(kV) >= 0 &&
+                             log.ChannelColumn(kW) >= 0;
+  if (!have_velocity) {
+    // Earth-frame velocity from position differences over +-5 rows, rotated into body axes.
+    const int a = std::max(0, row - 5), b = std::min(log.NumRows() - 1, row + 5);
+    Eigen::Vector3d v_E = Eigen::Vector3d::Zero();
+    for (int s = 0; s < 3; ++s) {
+      const int c = log.ChannelColumn(kX + s);
+      if (c >= 0 && b > a && std::isfinite(log.values(a, c)) && std::isfinite(log.values(b, c))) {
+        v_E[s] = (log.values(b, c) - log.values(a, c)) / (log.inputs.time(b) - log.inputs.time(a));
+      }
+    }
+    const Mat3<double> R_EB = BodyToEarth(x[kPhi], x[kTheta], x[kPsi]);
+    const Eigen::Vector3d v_B = R_EB.transpose() * v_E;
+    for (int s = 0; s < 3; ++s) {
+      if (log.ChannelColumn(kU + s) < 0) x[kU + s] = v_B[s];
+    }
+  }
+  return x;
+}
+
+namespace {
+
+// Builds the problem for one schedule entry. start_states(log, row) gives the
+// initial guess of a segment's start state.
+template <typename StartState>
+Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
+                  const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
+                  double segment_s, const OutputErrorOptions& options, double* theta_scaled,
+                  StartState start_state, bool tie_segments = true) {
+  Assembly a;
+  ceres::Problem::Options problem_options;
+  problem_options.enable_fast_removal = false;
+  a.problem = std::make_unique<ceres::Problem>(problem_options);
+  a.problem->AddParameterBlock(theta_scaled, free.size());
+  const Eigen::VectorXd lower = free.ScaledLower(), upper = free.ScaledUpper();
+  for (int k = 0; k < free.size(); ++k) {
+    if (std::isfinite(lower[k])) a.problem->SetParameterLowerBound(theta_scaled, k, lower[k]);
+    if (std::isfinite(upper[k])) a.problem->SetParameterUpperBound(theta_scaled, k, upper[k]);
+  }
+  ceres::LossFunction* loss = nullptr;  // owned per residual block below
+  a.segments.resize(logs.size());
+  a.segment_costs.resize(logs.size());
+  for (size_t i = 0; i < logs.size(); ++i) {
+    const EstimationLog& log = logs[i];
+    std::vector<double> channel_std;
+    for (const std::string& name : log.channel_names) channel_std.push_back(noise.For(name));
+    if (log.kind == LogKind::kBalance) {
+      for (int first = 0; first < log.NumRows(); first += options.balance_rows_per_block) {
+        const int end = std::min(log.NumRows(), first + options.balance_rows_per_block);
+        auto* cost = new BalanceRowsCost(vehicle.model, free, log, first, end, channel_std);
+        if (cost->num_residuals() == 0) {
+          delete cost;
+          continue;
+        }
+        loss = options.huber_threshold > 0 ? new ceres::HuberLoss(options.huber_threshold) : nullptr;
+        a.problem->AddResidualBlock(cost, loss, theta_scaled);
+      }
+      continue;
+    }
+    FittedSegments& seg = a.segments[i];
+    seg.starts = SegmentStarts(log, segment_s);
+    for (int start : seg.starts) seg.states.push_back(start_state(i, start));
+    const std::vector<int> unobservable = UnobservableStates(log, vehicle.model);
+    for (size_t j = 0; j < seg.starts.size(); ++j) {
+      double* block = seg.states[j].data();
+      a.problem->AddParameterBlock(block, kNumStates);
+      a.state_blocks.push_back(block);
+      if (j == 0 && !unobservable.empty()) {
+        a.problem->SetManifold(block, new ceres::SubsetManifold(kNumStates, unobservable));
+      }
+    }
+    for (size_t j = 0; j < seg.starts.size(); ++j) {
+      const bool has_next = tie_segments && j + 1 < seg.starts.size();
+      const int last = j + 1 < seg.starts.size() ? seg.starts[j + 1] : log.NumRows() - 1;
+      auto* cost = new FlightSegmentCost(vehicle.model, free, log, seg.starts[j], last, has_next,
+                                         channel_std, options.continuity_std, options.integrator);
+      a.segment_costs[i].push_back(cost);
+      // The Huber loss would also soften continuity; it is meant for outliers in outputs, and
+      // continuity residuals are near zero at any solution, so the distortion is nil.
+      loss = options.huber_threshold > 0 ? new ceres::HuberLoss(options.huber_threshold) : nullptr;
+      std::vector<double*> blocks = {seg.states[j].data(), theta_scaled};
+      if (has_next) blocks.push_back(seg.states[j + 1].data());
+      a.problem->AddResidualBlock(cost, loss, blocks);
+    }
+  }
+  return a;
+}
+
+// Predictions of the assembled problem at its current parameter values.
+bool Predict(const Vehicle& vehicle, const FreeParameters& free,
+             const std::vector<EstimationLog>& logs, const Assembly& a, const double* theta_scaled,
+             std::vector<Eigen::MatrixXd>* predictions) {
+  predictions->clear();
+  const Eigen::VectorXd theta = free.Theta(theta_scaled);
+  for (size_t i = 0; i < logs.size(); ++i) {
+    const EstimationLog& log = logs[i];
+    Eigen::MatrixXd pred = Eigen::MatrixXd::Constant(log.NumRows(), log.NumChannels(), NAN);
+    if (log.kind == LogKind::kBalance) {
+      double y[kNumBalanceChannels];
+      for (int k = 0; k < log.NumRows(); ++k) {
+        BalanceOutputs(vehicle.model, theta.data(), log.inputs.input(k).data(), y);
+        for (int c = 0; c < log.NumChannels(); ++c) pred(k, c) = y[log.channels[c]];
+      }
+    } else {
+      for (size_t j = 0; j < a.segment_costs[i].size(); ++j) {
+        const FlightSegmentCost* cost = a.segment_costs[i][j];
+        std::vector<Eigen::VectorXd> outputs;
+        Eigen::VectorXd end_state;
+        if (!cost->Predict(a.segments[i].states[j].data(), theta_scaled, &outputs, &end_state)) {
+          return false;
+        }
+        for (size_t r = 0; r < outputs.size(); ++r) {
+          for (int c = 0; c < log.NumChannels(); ++c) {
+            pred(cost->first() + r, c) = outputs[r][log.channels[c]];
+          }
+        }
+      }
+    }
+    predictions->push_back(std::move(pred));
+  }
+  return true;
+}
+
+// The Fisher information of the free parameters (scaled coordinates) with the
+// segment states marginalised out (Schur complement), from the Jacobian at
+// the solution, evaluated without any robust loss.
+Eigen::MatrixXd MarginalInformation(Assembly& a, double* theta_scaled, int P) {
+  ceres::Problem::EvaluateOptions eval;
+  eval.parameter_blocks.push_back(theta_scaled);
+  for (double* b : a.state_blocks) eval.parameter_blocks.push_back(b);
+  eval.apply_loss_function = false;
+  eval.num_threads = 2;
+  ceres::CRSMatrix crs;
+  a.problem->Evaluate(eval, nullptr, nullptr, nullptr, &crs);
+  using Sparse = Eigen::SparseMatrix<double, Eigen::ColMajor>;
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(crs.values.size());
+  for (int r = 0; r < crs.num_rows; ++r) {
+    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) {
+      triplets.emplace_back(r, crs.cols[k], crs.values[k]);
+    }
+  }
+  Sparse J(crs.num_rows, crs.num_cols);
+  J.setFromTriplets(triplets.begin(), triplets.end());
+  const Sparse H = (J.transpose() * J).pruned();
+  const int n = crs.num_cols;
+  // Parameter block order puts theta's P columns first (no manifold on it).
+  const Eigen::MatrixXd H_tt = Eigen::MatrixXd(H.topLeftCorner(P, P));
+  if (n == P) return H_tt;
+  const Sparse H_ss = H.bottomRightCorner(n - P, n - P);
+  const Eigen::MatrixXd H_st = Eigen::MatrixXd(H.bottomLeftCorner(n - P, P));
+  Eigen::SimplicialLDLT<Sparse> ldlt(H_ss);
+  if (ldlt.info() != Eigen::Success) return H_tt;  // cannot marginalise: conditional info
+  const Eigen::MatrixXd X = ldlt.solve(H_st);
+  return H_tt - H_st.transpose() * X;
+}
+
+}  // namespace
+
+std::map<std::string, FitError> ChannelFitErrors(const std::vector<EstimationLog>& logs,
+                                                 const std::vector<Eigen::MatrixXd>& predictions) {
+  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> pooled;
+  for (size_t i = 0; i < logs.size(); ++i) {
+    for (int c = 0; c < logs[i].NumChannels(); ++c) {
+      auto& [measured, model] = pooled[logs[i].channel_names[c]];
+      for (int k = 0; k < logs[i].NumRows(); ++k) {
+        measured.push_back(logs[i].values(k, c));
+        model.push_back(predictions[i](k, c));
+      }
+    }
+  }
+  std::map<std::string, FitError> out;
+  for (const auto& [name, mm] : pooled) out[name] = ComputeFitError(mm.first, mm.second);
+  return out;
+}
+
+OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
+                                 const OutputErrorOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("output-error options: " + why);
+  if (logs.empty()) throw InputError("output-error needs at least one log");
+  const auto start = Clock::now();
+  OutputErrorResult result;
+  result.parameters = vehicle.parameters;
+  const FreeParameters free(vehicle.parameters);
+  if (free.size() == 0) throw InputError("no parameter is marked estimated in the config");
+  for (const EstimationLog& log : logs) {
+    if (log.kind == LogKind::kFlight &&
+        (log.ChannelColumn(kPhi) < 0 || log.ChannelColumn(kP) < 0)) {
+      throw InputError(log.source + ": a flight log needs attitude and rates to be fitted");
+    }
+  }
+  NoiseWeights noise = options.noise.std.empty() ? NoiseFromData(logs) : options.noise;
+  Eigen::VectorXd theta_scaled = free.ScaledValues();
+
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = options.num_threads;
+  solver_options.function_tolerance = options.function_tolerance;
+  solver_options.parameter_tolerance = options.parameter_tolerance;
+  solver_options.gradient_tolerance = options.gradient_tolerance;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.update_state_every_iteration = false;
+
+  Assembly previous;
+  bool have_previous = false;
+  std::vector<Eigen::MatrixXd> previous_predictions;
+  double integration_seconds = 0;
+  const int num_stages =
+      static_cast<int>(options.segment_schedule_s.size()) + options.noise_relaxations;
+  for (int stage = 0; stage < num_stages; ++stage) {
+    const int schedule_index =
+        std::min(stage, static_cast<int>(options.segment_schedule_s.size()) - 1);
+    const double segment_s = options.segment_schedule_s[schedule_index];
+    if (stage >= static_cast<int>(options.segment_schedule_s.size())) {
+      // Output-error relaxation: new weights from the last solve's residuals.
+      std::vector<Eigen::MatrixXd> residuals;
+      for (size_t i = 0; i < logs.size(); ++i) {
+        residuals.push_back(logs[i].values - previous_predictions[i]);
+      }
+      noise = NoiseFromResiduals(logs, residuals);
+    }
+    // Segment start states: measured at the first stage, then the previous
+    // solve's trajectory at the new boundaries.
+    auto start_state = [&](size_t log_index, int row) -> Eigen::VectorXd {
+      if (!have_previous) return InitialStateFromLog(logs[log_index], row);
+      const auto& seg = previous.segments[log_index];
+      const auto& costs = previous.segment_costs[log_index];
+      int j = static_cast<int>(std::upper_bound(seg.starts.begin(), seg.starts.end(), row) -
+                               seg.starts.begin()) - 1;
+      j = std::max(j, 0);
+      if (seg.starts[j] == row) return seg.states[j];
+      std::vector<Eigen::VectorXd> outputs;
+      Eigen::VectorXd end_state;
+      if (costs[j]->Predict(seg.states[j].data(), theta_scaled.data(), &outputs, &end_state) &&
+          row - seg.starts[j] < static_cast<int>(outputs.size())) {
+        return outputs[row - seg.starts[j]].head(kNumStates);
+      }
+      return InitialStateFromLog(logs[log_index], row);
+    };
+    Assembly a = Assemble(vehicle, free, logs, noise, segment_s, options, theta_scaled.data(),
+                          start_state);
+    char stage_name[96];
+    std::snprintf(stage_name, sizeof stage_name, "output-error stage %d/%d (segments %.2f s)",
+                  stage + 1, num_stages, segment_s);
+    const bool coarse = stage + 1 < static_cast<int>(options.segment_schedule_s.size());
+    solver_options.max_num_iterations =
+        coarse ? options.coarse_max_iterations : options.max_iterations;
+    solver_options.function_tolerance =
+        coarse ? options.coarse_function_tolerance : options.function_tolerance;
+    ProgressCallback callback(options, stage_name, start);
+    solver_options.callbacks = {&callback};
+    ceres::Solver::Summary summary;
+    const auto solve_start = Clock::now();
+    ceres::Solve(solver_options, a.problem.get(), &summary);
+    integration_seconds += Since(solve_start);
+    if (stage == 0) result.initial_cost = summary.initial_cost;
+    result.iterations += summary.iterations.size() > 0 ? summary.iterations.size() - 1 : 0;
+    result.final_cost = summary.final_cost;
+    result.termination = summary.message;
+    if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() ||
+        !theta_scaled.allFinite()) {
+      result.usable = false;
+      result.why_not_usable = std::string(stage_name) + ": the solver failed: " + summary.message;
+      return result;
+    }
+    if (!Predict(vehicle, free, logs, a, theta_scaled.data(), &previous_predictions)) {
+      result.usable = false;
+      result.why_not_usable = std::string(stage_name) +
+                              ": the model cannot be simulated at the solution (CVODE failed)";
+      return result;
+    }
+    previous = std::move(a);
+    have_previous = true;
+  }
+
+  const auto covariance_start = Clock::now();
+  const Eigen::MatrixXd information =
+      MarginalInformation(previous, theta_scaled.data(), free.size());
+  result.identifiability = AnalyzeIdentifiability(information, free.names(), free.scales());
+  free.WriteBack(theta_scaled.data(), &result.parameters);
+  result.noise = noise;
+  result.segments = previous.segments;
+  result.predictions = previous_predictions;
+  result.usable = true;
+  result.seconds = Since(start);
+  result.timing = {{"solves_seconds", integration_seconds},
+                   {"covariance_seconds", Since(covariance_start)},
+                   {"total_seconds", result.seconds}};
+  return result;
+}
+
+std::vector<Eigen::MatrixXd> PredictWithFixedParameters(const Vehicle& vehicle,
+                                                        const std::vector<EstimationLog>& logs,
+                                                        const NoiseWeights& noise,
+                                                        double window_s,
+                                                        const OutputErrorOptions& options) {
+  // Only the window start states are free: one small fit per window.
+  ParameterSet fixed = vehicle.parameters;
+  const FreeParameters free(fixed);
+  Eigen::VectorXd theta_scaled = free.ScaledValues();
+  std::vector<Eigen::MatrixXd> predictions;
+  for (const EstimationLog& log : logs) {
+    std::vector<EstimationLog> one = {log};
+    // Windows are independent (no continuity ties): each start state comes
+    // from its own window's data alone.
+    Assembly a = Assemble(
+        vehicle, free, one, noise, window_s, options, theta_scaled.data(),
+        [&](size_t, int row) { return InitialStateFromLog(log, row); }, /*tie_segments=*/false);
+    a.problem->SetParameterBlockConstant(theta_scaled.data());
+    if (log.kind == LogKind::kFlight) {
+      ceres::Solver::Options so;
+      so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+      so.max_num_iterations = 50;
+      so.num_threads = options.num_threads;
+      so.logging_type = ceres::SILENT;
+      ceres::Solver::Summary summary;
+      ceres::Solve(so, a.problem.get(), &summary);
+    }
+    std::vector<Eigen::MatrixXd> p;
+    if (!Predict(vehicle, free, one, a, theta_scaled.data(), &p)) {
+      throw ComputationError(log.source + ": the model cannot be simulated on the held-out data");
+    }
+    predictions.push_back(p[0]);
+  }
+  return predictions;
+}
+
+}  // namespace coaxid

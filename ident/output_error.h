@@ -1,0 +1,120 @@
+// Nonlinear output-error estimation of every free parameter of a vehicle
+// (model.md's unknowns and any enabled effect's parameters) jointly from one
+// or several logs, balance and flight mixed, with Ceres.
+//
+// Flight logs: the 6-DoF model integrated with CVODE over the logged inputs,
+// by multiple shooting (the open-loop hover is unstable, so one long
+// simulation diverges): each log is cut into segments whose initial states
+// are estimated with the parameters, tied together by continuity residuals.
+// The segments start short and grow (coarse-to-fine, default 0.25 s then
+// 1 s), which keeps the fit out of wrong minima from a nominal start.
+// Balance logs: the static load model (eqs. 57-63) as residual blocks of the
+// same problem. Residuals are weighted by the channel noise std, re-estimated
+// from the residuals between solves (the classical output-error relaxation).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "core/parameters.h"
+#include "core/statistics.h"
+#include "dynamics/integrator.h"
+#include "dynamics/vehicle.h"
+#include "ident/estimation_log.h"
+#include "ident/identifiability.h"
+#include "ident/noise_weights.h"
+
+namespace coaxid {
+
+struct OutputErrorOptions {
+  // Multiple-shooting segment lengths [s], one solve per entry, coarse to fine.
+  std::vector<double> segment_schedule_s{0.25, 1.0};
+  int max_iterations = 100;        // per solve at the final segment length
+  // The coarse stages only bring the start into the right basin: a few
+  // iterations and a loose stopping rule.
+  int coarse_max_iterations = 15;
+  double coarse_function_tolerance = 1e-4;
+  // Re-estimate the noise std from the residuals and solve again this many times.
+  int noise_relaxations = 2;
+  // Start (and, with noise_relaxations = 0, keep) these noise std; empty: from the data.
+  NoiseWeights noise;
+  // Continuity residual scale [state units]: small, so segments join up.
+  double continuity_std = 1e-4;
+  // > 0: Huber loss on the output residuals at this many std (robust fit).
+  double huber_threshold = 0;
+  IntegratorOptions integrator = DefaultIntegrator();
+  int num_threads = 2;
+  int balance_rows_per_block = 512;
+  // Ceres stopping rules. A relative cost change of 1e-7 is far below what one
+  // standard deviation of any parameter changes the cost by (0.5 / cost).
+  double function_tolerance = 1e-7, parameter_tolerance = 1e-10, gradient_tolerance = 1e-12;
+  // Progress lines (iteration, cost, elapsed); nullptr for none. Library code
+  // does not print: the CLI passes a function that writes to stderr.
+  std::function<void(const std::string&)> progress;
+
+  static IntegratorOptions DefaultIntegrator() {
+    IntegratorOptions o;
+    o.relative_tolerance = 1e-7;
+    o.absolute_tolerance = 1e-9;
+    o.sensitivity_error_control = false;
+    // A wild trial step (blown-up parameters) fails fast instead of grinding.
+    o.max_steps_per_interval = 500;
+    return o;
+  }
+  bool IsValid(std::string* why) const;
+};
+
+// One flight log's fitted multiple-shooting segments.
+struct FittedSegments {
+  std::vector<int> starts;                  // segment start rows; the last row ends the last one
+  std::vector<Eigen::VectorXd> states;      // estimated start state of each segment
+};
+
+struct OutputErrorResult {
+  bool usable = false;
+  std::string why_not_usable;
+  ParameterSet parameters;                  // estimates written back
+  IdentifiabilityReport identifiability;    // std, covariance, correlation, null directions
+  NoiseWeights noise;                       // the weights of the final solve
+  std::vector<FittedSegments> segments;     // per log (empty for balance logs)
+  // Model outputs on the fitted logs: flight, predictions over each segment
+  // started from its fitted state; balance, the static model. Same shape as
+  // each log's values.
+  std::vector<Eigen::MatrixXd> predictions;
+  int iterations = 0;
+  double initial_cost = 0, final_cost = 0;
+  std::string termination;                  // Ceres' reason for stopping
+  double seconds = 0;
+  nlohmann::json timing;                    // where the time went
+};
+
+// Fits vehicle's free parameters to the logs. Throws InputError for invalid
+// options or logs that cannot be used (too short for one segment), and
+// returns usable = false (with the reason) when the solve fails.
+OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
+                                 const OutputErrorOptions& options);
+
+// Model predictions for logs with the parameters fixed (held-out validation):
+// balance logs through the static model; flight logs over consecutive windows
+// of window_s, each started from a state estimated on that window alone with
+// the parameters held fixed (an honest validation for an unstable plant).
+std::vector<Eigen::MatrixXd> PredictWithFixedParameters(const Vehicle& vehicle,
+                                                        const std::vector<EstimationLog>& logs,
+                                                        const NoiseWeights& noise,
+                                                        double window_s,
+                                                        const OutputErrorOptions& options);
+
+// Per-channel fit errors of predictions against the logs' values.
+std::map<std::string, FitError> ChannelFitErrors(const std::vector<EstimationLog>& logs,
+                                                 const std::vector<Eigen::MatrixXd>& predictions);
+
+// The state at a row from the log's measurements: measured states where
+// present, velocity from differenced position where u, v, w are missing,
+// zero otherwise.
+Eigen::VectorXd InitialStateFromLog(const EstimationLog& log, int row);
+
+}  // namespace coaxid

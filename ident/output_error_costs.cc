@@ -1,0 +1,201 @@
+#include "ident/output_error_costs.h"
+
+#include <cmath>
+
+#include <glog/logging.h>
+
+#include "dynamics/model_jacobian.h"
+#include "dynamics/outputs.h"
+
+namespace coaxid {
+
+FlightSegmentCost::FlightSegmentCost(const VehicleModel& model, const FreeParameters& free,
+                                     const EstimationLog& log, int first, int last,
+                                     bool has_next, const std::vector<double>& channel_std,
+                                     double continuity_std, const IntegratorOptions& integrator)
+    : model_(model),
+      free_(free),
+      log_(log),
+      first_(first),
+      last_(last),
+      has_next_(has_next),
+      continuity_weight_(1.0 / continuity_std) {
+  CHECK(first >= 0 && first < last && last < log.NumRows());
+  const int end = has_next ? last - 1 : last;
+  for (int k = first; k <= end; ++k) {
+    bool any = false;
+    for (int c = 0; c < log.NumChannels(); ++c) {
+      if (std::isfinite(log.values(k, c))) {
+        terms_.push_back({k, c, log.channels[c], 1.0 / channel_std[c]});
+        any = true;
+      }
+    }
+    if (any) rows_.push_back(k);
+  }
+  set_num_residuals(static_cast<int>(terms_.size()) + (has_next ? kNumStates : 0));
+  mutable_parameter_block_sizes()->push_back(kNumStates);
+  mutable_parameter_block_sizes()->push_back(free.size());
+  if (has_next) mutable_parameter_block_sizes()->push_back(kNumStates);
+
+  const Eigen::VectorXd theta = free.Theta(free.ScaledValues().data());
+  plain_ = std::make_unique<Simulator>(model, theta, integrator);
+  sensitive_ = std::make_unique<Simulator>(model, theta, integrator, SensitivityOptions{true, true},
+                                           free.indices());
+}
+
+bool FlightSegmentCost::Predict(const double* start_state, const double* theta_scaled,
+                                std::vector<Eigen::VectorXd>* outputs,
+                                Eigen::VectorXd* end_state) const {
+  const Eigen::VectorXd theta = free_.Theta(theta_scaled);
+  plain_->SetTheta(theta);
+  Trajectory trajectory;
+  if (!plain_->Run(log_.inputs, first_, last_,
+                   Eigen::Map<const Eigen::VectorXd>(start_state, kNumStates), &trajectory)) {
+    return false;
+  }
+  outputs->clear();
+  const int end = has_next_ ? last_ - 1 : last_;
+  for (int k = first_; k <= end; ++k) {
+    Eigen::VectorXd y(kNumFlightChannels);
+    const Eigen::VectorXd& x = trajectory.states[k - first_];
+    FlightOutputs(model_, theta.data(), x.data(), log_.inputs.input(k).data(), y.data());
+    outputs->push_back(y);
+  }
+  *end_state = trajectory.states.back();
+  return true;
+}
+
+bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residuals,
+                                 double** jacobians) const {
+  const int P = free_.size();
+  const bool want_state = jacobians && jacobians[0];
+  const bool want_theta = jacobians && jacobians[1];
+  const bool want_next = jacobians && has_next_ && jacobians[2];
+  const bool sensitivities = want_state || want_theta;
+  const Eigen::VectorXd theta = free_.Theta(parameters[1]);
+  Simulator& simulator = sensitivities ? *sensitive_ : *plain_;
+  simulator.SetTheta(theta);
+  Trajectory trajectory;
+  if (!simulator.Run(log_.inputs, first_, last_,
+                     Eigen::Map<const Eigen::VectorXd>(parameters[0], kNumStates), &trajectory)) {
+    return false;
+  }
+  const int num_residuals = this->num_residuals();
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J_state(
+      want_state ? jacobians[0] : nullptr, want_state ? num_residuals : 0, kNumStates);
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J_theta(
+      want_theta ? jacobians[1] : nullptr, want_theta ? num_residuals : 0, P);
+
+  double y[kNumFlightChannels];
+  Eigen::MatrixXd dydx, dydp;
+  size_t term = 0;
+  for (int k : rows_) {
+    const int i = k - first_;
+    const Eigen::VectorXd& x = trajectory.states[i];
+    // The accelerometer needs the model (and its Jacobians); states are read directly.
+    bool accelerometer = false;
+    for (size_t t = term; t < terms_.size() && terms_[t].row == k; ++t) {
+      accelerometer = accelerometer || terms_[t].channel >= kNumStates;
+    }
+    if (accelerometer) {
+      if (!FlightOutputJacobians(model_, theta, x.data(), log_.inputs.input(k), free_.indices(),
+                                 y, sensitivities ? &dydx : nullptr,
+                                 want_theta ? &dydp : nullptr)) {
+        return false;
+      }
+    } else {
+      for (int s = 0; s < kNumStates; ++s) y[s] = x[s];
+    }
+    for (; term < terms_.size() && terms_[term].row == k; ++term) {
+      const Term& t = terms_[term];
+      residuals[term] = t.weight * (y[t.channel] - log_.values(k, t.column));
+      if (!sensitivities) continue;
+      const Eigen::MatrixXd& S = trajectory.sensitivities[i];  // 12 x (12 + P)
+      if (t.channel < kNumStates) {
+        if (want_state) J_state.row(term) = t.weight * S.block(t.channel, 0, 1, kNumStates);
+        if (want_theta) {
+          J_theta.row(term) =
+              t.weight * S.block(t.channel, kNumStates, 1, P).cwiseProduct(free_.scales().transpose());
+        }
+      } else {
+        const Eigen::RowVectorXd dx = dydx.row(t.channel);
+        if (want_state) J_state.row(term) = t.weight * dx * S.leftCols(kNumStates);
+        if (want_theta) {
+          J_theta.row(term) = t.weight * (dx * S.rightCols(P) + dydp.row(t.channel))
+                                             .cwiseProduct(free_.scales().transpose());
+        }
+      }
+    }
+  }
+  if (has_next_) {
+    const int base = static_cast<int>(terms_.size());
+    const Eigen::VectorXd& x_end = trajectory.states.back();
+    for (int s = 0; s < kNumStates; ++s) {
+      residuals[base + s] = continuity_weight_ * (x_end[s] - parameters[2][s]);
+    }
+    if (sensitivities) {
+      const Eigen::MatrixXd& S = trajectory.sensitivities.back();
+      if (want_state) {
+        J_state.block(base, 0, kNumStates, kNumStates) =
+            continuity_weight_ * S.leftCols(kNumStates);
+      }
+      if (want_theta) {
+        J_theta.block(base, 0, kNumStates, P) =
+            continuity_weight_ * S.rightCols(P) * free_.scales().asDiagonal();
+      }
+    }
+    if (want_next) {
+      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J_next(
+          jacobians[2], num_residuals, kNumStates);
+      J_next.setZero();
+      J_next.block(base, 0, kNumStates, kNumStates) =
+          -continuity_weight_ * Eigen::MatrixXd::Identity(kNumStates, kNumStates);
+    }
+  }
+  for (int r = 0; r < num_residuals; ++r) {
+    if (!std::isfinite(residuals[r])) return false;
+  }
+  return true;
+}
+
+BalanceRowsCost::BalanceRowsCost(const VehicleModel& model, const FreeParameters& free,
+                                 const EstimationLog& log, int first, int end,
+                                 const std::vector<double>& channel_std)
+    : model_(model), free_(free), log_(log), first_(first), end_(end) {
+  for (int k = first; k < end; ++k) {
+    for (int c = 0; c < log.NumChannels(); ++c) {
+      if (std::isfinite(log.values(k, c))) {
+        terms_.push_back({k, c, log.channels[c], 1.0 / channel_std[c]});
+      }
+    }
+  }
+  set_num_residuals(static_cast<int>(terms_.size()));
+  mutable_parameter_block_sizes()->push_back(free.size());
+}
+
+bool BalanceRowsCost::Evaluate(double const* const* parameters, double* residuals,
+                               double** jacobians) const {
+  const int P = free_.size();
+  const bool want = jacobians && jacobians[0];
+  const Eigen::VectorXd theta = free_.Theta(parameters[0]);
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
+      want ? jacobians[0] : nullptr, want ? num_residuals() : 0, P);
+  double y[kNumBalanceChannels];
+  Eigen::MatrixXd dydp;
+  int current_row = -1;
+  for (size_t term = 0; term < terms_.size(); ++term) {
+    const Term& t = terms_[term];
+    if (t.row != current_row) {
+      current_row = t.row;
+      if (!BalanceOutputJacobians(model_, theta, log_.inputs.input(t.row), free_.indices(), y,
+                                  want ? &dydp : nullptr)) {
+        return false;
+      }
+    }
+    residuals[term] = t.weight * (y[t.channel] - log_.values(t.row, t.column));
+    if (want) J.row(term) = t.weight * dydp.row(t.channel).cwiseProduct(free_.scales().transpose());
+  }
+  return true;
+}
+
+}  // namespace coaxid

@@ -1,0 +1,93 @@
+// The residual blocks of the output-error problem (Ceres cost functions).
+//
+// FlightSegmentCost, one multiple-shooting segment [first, last] of a flight
+// log, parameter blocks (s_j [12], theta_scaled [P] [, s_j+1 [12]]):
+//   r(k, c) = (h_c(x_k, u_k, theta) - y(k, c)) / std_c   for rows first..end,
+//   r_cont  = (x(t_last; s_j, theta) - s_j+1) / continuity_std,
+// where x_k comes from CVODE started at x(t_first) = s_j over the logged
+// zero-order-hold inputs, h is the flight output model (dynamics/outputs.h),
+// and the Jacobians come from the sensitivities dx_k/d[s_j, theta] chained
+// with the autodiff Jacobians of h. Rows end at last - 1, or at last for the
+// final segment of a log (the next segment owns row `last`).
+//
+// BalanceRowsCost, a chunk of balance-log rows, parameter block (theta_scaled):
+//   r(k, c) = (h_c(u_k, theta) - y(k, c)) / std_c
+// with h the balance output model and its autodiff Jacobian.
+//
+// Both return false (Ceres rejects the step) when the model cannot be
+// evaluated: CVODE failure, non-finite values.
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include <ceres/ceres.h>
+
+#include "dynamics/simulator.h"
+#include "dynamics/vehicle_model.h"
+#include "ident/estimation_log.h"
+#include "ident/free_parameters.h"
+
+namespace coaxid {
+
+class FlightSegmentCost : public ceres::CostFunction {
+ public:
+  // channel_std[c]: noise std of log channel c. All references must outlive the cost.
+  FlightSegmentCost(const VehicleModel& model, const FreeParameters& free, const EstimationLog& log,
+                    int first, int last, bool has_next, const std::vector<double>& channel_std,
+                    double continuity_std, const IntegratorOptions& integrator);
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+  int first() const { return first_; }
+  int last() const { return last_; }
+  int NumOutputResiduals() const { return static_cast<int>(terms_.size()); }
+
+  // The model's outputs (15 flight channels) at rows first..end and the state
+  // at `last`, for given segment start state and scaled parameters. False if
+  // the simulation fails.
+  bool Predict(const double* start_state, const double* theta_scaled,
+               std::vector<Eigen::VectorXd>* outputs, Eigen::VectorXd* end_state) const;
+
+ private:
+  struct Term {
+    int row;      // log row
+    int column;   // log channel column
+    int channel;  // FlightChannel
+    double weight;
+  };
+  const VehicleModel& model_;
+  const FreeParameters& free_;
+  const EstimationLog& log_;
+  int first_, last_;
+  bool has_next_;
+  double continuity_weight_;
+  std::vector<Term> terms_;
+  std::vector<int> rows_;  // distinct rows with terms, ascending
+  // One simulator without and one with sensitivities; Ceres may evaluate
+  // different blocks in parallel but never one block twice at once.
+  mutable std::unique_ptr<Simulator> plain_, sensitive_;
+};
+
+class BalanceRowsCost : public ceres::CostFunction {
+ public:
+  BalanceRowsCost(const VehicleModel& model, const FreeParameters& free, const EstimationLog& log,
+                  int first, int end, const std::vector<double>& channel_std);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  struct Term {
+    int row, column, channel;
+    double weight;
+  };
+  const VehicleModel& model_;
+  const FreeParameters& free_;
+  const EstimationLog& log_;
+  int first_, end_;
+  std::vector<Term> terms_;
+};
+
+}  // namespace coaxid

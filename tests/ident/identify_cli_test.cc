@@ -1,0 +1,209 @@
+// `coaxid identify --method=linear_kf` and the linear_kf part of `coaxid
+// check`, run as a user would (cli-and-reports.md): report.json with the
+// contract's fields, the CSVs and plots; exit 2 with one clear message and
+// nothing written to --out on bad input.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/atomic_file.h"
+#include "core/plot.h"
+#include "tests/ident/balance_test_util.h"
+
+namespace coaxid {
+namespace {
+
+namespace fs = std::filesystem;
+using testing_util::SimulatedBalance;
+
+struct RunResult {
+  int status;
+  std::string output;  // stdout + stderr
+};
+
+RunResult RunCoaxid(const std::string& args) {
+  const std::string command = std::string(COAXID_BINARY) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  char buffer[4096];
+  while (size_t n = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, n);
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+bool Contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+class IdentifyCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("coaxid_identify_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    config_ = std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string WriteBalance(const std::string& name, const BalanceScenario& s, uint64_t seed) {
+    WriteLog(Path(name), SimulatedBalance(s, seed));
+    return Path(name);
+  }
+  std::string Identify(const std::string& logs, const std::string& out,
+                       const std::string& extra = "") const {
+    return "identify --method=linear_kf --logs=" + logs + " --config=" + config_ + " --out=" + out +
+           " " + extra;
+  }
+  fs::path dir_;
+  std::string config_;
+};
+
+TEST_F(IdentifyCliTest, WritesTheReportTablesAndPlots) {
+  BalanceScenario s;
+  s.hold_s = 0.5;
+  const std::string log = WriteBalance("bal.csv", s, 31);
+  const std::string out = Path("out");
+  const RunResult r = RunCoaxid(Identify(log, out));
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(Contains(r.output, "identify: done")) << r.output;
+
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(out + "/report.json"));
+  EXPECT_EQ(report["method"], "linear_kf");
+  EXPECT_EQ(report["logs"][0], log);
+  // The paper's vector plus alpha, and Cz (cli-and-reports.md).
+  for (const char* name :
+       {"beta", "Cz_alpha", "Cz_beta", "gamma1", "gamma2", "alpha", "Cz", "sigma0"}) {
+    ASSERT_TRUE(report["parameters"].contains(name)) << name;
+    const auto& p = report["parameters"][name];
+    EXPECT_TRUE(p["value"].is_number()) << name;
+    EXPECT_TRUE(p["std"].is_number()) << name;
+    EXPECT_EQ(p["estimated"], true) << name;
+  }
+  // d and the known constants are reported, not estimated (model.md decision 6).
+  for (const char* name : {"d", "m", "rho", "R", "D"}) {
+    EXPECT_EQ(report["parameters"][name]["estimated"], false) << name;
+  }
+  for (const char* section : {"fit", "validation"}) {
+    for (const char* channel : {"X", "Y", "Z", "L", "M", "N"}) {
+      EXPECT_TRUE(report[section][channel]["rms"].is_number()) << section << " " << channel;
+      EXPECT_TRUE(report[section][channel]["nrmse"].is_number()) << section << " " << channel;
+      EXPECT_TRUE(report[section][channel]["mean_relative_error"].is_number());
+    }
+    EXPECT_TRUE(report[section]["overall_nrmse"].is_number()) << section;
+  }
+  // Without --validate the final part of the log is held out, and the report says which.
+  EXPECT_TRUE(Contains(report["validation"]["data"].get<std::string>(), "rows"));
+  for (const char* section :
+       {"noise_covariance", "excitation", "thrust_map", "interference", "kalman", "notes"}) {
+    EXPECT_TRUE(report.contains(section)) << section;
+  }
+  EXPECT_EQ(report["excitation"]["exciting"], true);
+  const std::string notes = report["notes"].dump();
+  EXPECT_TRUE(Contains(notes, "from the vehicle config")) << notes;            // d
+  EXPECT_TRUE(Contains(notes, "interference map of the same logs")) << notes;  // sigma
+
+  for (const char* file : {"config.yaml", "thrust_map.csv", "sigma_map.csv", "kf_history.csv",
+                           "reconstruction_bal.csv"}) {
+    EXPECT_TRUE(fs::exists(out + "/" + file)) << file;
+  }
+  // kf_history.csv: one line per update plus the header.
+  const std::string history = ReadFile(out + "/kf_history.csv");
+  EXPECT_EQ(std::count(history.begin(), history.end(), '\n'),
+            report["kalman"]["updates"].get<int>() + 1);
+  // The resolved config loads back.
+  EXPECT_NO_THROW(LoadVehicleConfig(out + "/config.yaml"));
+  if (GnuplotAvailable()) {
+    for (const char* plot :
+         {"fig08_thrust_map.png", "fig09_sigma_map.png", "fig10_estimation_bal.png",
+          "fig11_kalman.png", "fig12_validation_bal.png", "fig13_reconstruction_bal.png"}) {
+      EXPECT_TRUE(fs::exists(out + "/plots/" + plot)) << plot;
+    }
+  }
+}
+
+TEST_F(IdentifyCliTest, ValidatesOnOtherLogsAndTakesSeveralLogs) {
+  BalanceScenario s;
+  s.hold_s = 0.3;
+  const std::string a = WriteBalance("a.csv", s, 1);
+  const std::string b = WriteBalance("b.csv", s, 2);
+  const std::string c = WriteBalance("c.csv", s, 3);
+  const std::string out = Path("out");
+  const RunResult r = RunCoaxid(Identify(a + "," + b, out, "--validate=" + c));
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(out + "/report.json"));
+  EXPECT_EQ(report["logs"].size(), 2u);
+  EXPECT_EQ(report["validation_logs"][0], c);
+  EXPECT_EQ(report["validation"]["Z"]["count"], SimulatedBalance(s, 3).NumRows());
+  EXPECT_EQ(report["noise_covariance"]["data_sets"].size(), 2u);
+}
+
+TEST_F(IdentifyCliTest, AnUnexcitingLogExitsTwoAndWritesNothing) {
+  BalanceScenario s;
+  s.hold_s = 0.3;
+  s.delta_cx = {0.0};
+  s.delta_cy = {0.0};
+  const std::string log = WriteBalance("still.csv", s, 1);
+  const std::string out = Path("out");
+  const RunResult r = RunCoaxid(Identify(log, out));
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_TRUE(Contains(r.output, "swashplate condition fails")) << r.output;
+  EXPECT_TRUE(Contains(r.output, "delta_cx or delta_cy must vary")) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+
+  // `check` prints the same verdict for the log, and succeeds (the log is valid).
+  const RunResult check = RunCoaxid("check --logs=" + log);
+  EXPECT_EQ(check.status, 0) << check.output;
+  EXPECT_TRUE(Contains(check.output, "swashplate (X41, X51 nonzero: beta vs Cz_beta): FAILS"))
+      << check.output;
+  EXPECT_TRUE(Contains(check.output, "condition (71) Cz_alpha vs Cz_beta: holds")) << check.output;
+}
+
+TEST_F(IdentifyCliTest, BadInputExitsTwoAndWritesNothing) {
+  BalanceScenario s;
+  s.hold_s = 0.3;
+  const std::string log = WriteBalance("bal.csv", s, 1);
+  const std::string out = Path("out");
+  const std::string flight = std::string(COAXID_SOURCE_DIR) + "/data/glmav/flight_3211.csv";
+  struct Case {
+    std::string args, message;
+  } cases[] = {
+      {Identify(flight, out), "balance logs only"},
+      {Identify(log, out, "--validate=" + flight), "balance logs only"},
+      {"identify --method=ekf --logs=" + log + " --config=" + config_ + " --out=" + out,
+       "method 'ekf' is not available yet (linear_kf only)"},
+      {"identify --method=magic --logs=" + log + " --config=" + config_ + " --out=" + out,
+       "unknown method 'magic'"},
+      {"identify --logs=" + log + " --config=" + config_ + " --out=" + out, "missing --method"},
+      {Identify(log, out, "--holdout_fraction=1.5"), "--holdout_fraction"},
+      {Identify(log, out, "--process_noise=-1"), "--process_noise"},
+      {Identify(Path("missing.csv"), out), "missing.csv"},
+  };
+  for (const Case& c : cases) {
+    const RunResult r = RunCoaxid(c.args);
+    EXPECT_EQ(r.status, 2) << c.args << "\n" << r.output;
+    EXPECT_TRUE(Contains(r.output, c.message)) << c.message << " in\n" << r.output;
+    EXPECT_FALSE(fs::exists(out)) << c.args;
+  }
+}
+
+TEST_F(IdentifyCliTest, CheckSaysFlightLogsAreNotForLinearKf) {
+  const std::string flight = std::string(COAXID_SOURCE_DIR) + "/data/glmav/flight_3211.csv";
+  const std::string balance = std::string(COAXID_SOURCE_DIR) + "/data/glmav/balance.csv";
+  const RunResult r = RunCoaxid("check --logs=" + flight + "," + balance);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(Contains(r.output, "applies to balance logs only")) << r.output;
+  EXPECT_TRUE(Contains(r.output, "persistently exciting")) << r.output;
+  EXPECT_TRUE(Contains(r.output, "epsilon")) << r.output;
+}
+
+}  // namespace
+}  // namespace coaxid
