@@ -18,6 +18,7 @@
 #include "dynamics/vehicle.h"
 #include "experiments/cli.h"
 #include "experiments/cli_flags.h"
+#include "experiments/identify_output_error.h"
 #include "ident/baseline_plots.h"
 #include "ident/baseline_report.h"
 #include "ident/linear_baseline.h"
@@ -41,13 +42,12 @@ void Require(const std::string& value, const char* flag) {
 }
 
 void CheckMethod(const std::string& method) {
-  if (method == "linear_kf") return;
-  if (method == "ekf" || method == "output_error") {
-    throw InputError("method '" + method + "' is not available yet (linear_kf only)");
+  if (method == "linear_kf" || method == "output_error") return;
+  if (method == "ekf") {
+    throw InputError("method '" + method + "' is not available yet (linear_kf, output_error)");
   }
   throw InputError("unknown method '" + method +
-                   "' (the methods are linear_kf, ekf and output_error; this build has "
-                   "linear_kf)");
+                   "' (the methods are linear_kf, ekf and output_error)");
 }
 
 // Reads logs; linear_kf takes balance logs only.
@@ -128,6 +128,7 @@ int RunIdentify() {
   const auto start = std::chrono::steady_clock::now();
   Require(FLAGS_method, "method");
   CheckMethod(FLAGS_method);
+  if (FLAGS_method == "output_error") return RunIdentifyOutputError();
   Require(FLAGS_logs, "logs");
   Require(FLAGS_config, "config");
   Require(FLAGS_out, "out");

@@ -85,65 +85,6 @@ std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs) {
   return samples;
 }
 
-// The filter's parameter coordinates p (EkfOptions::logarithmic_parameters):
-// p_k = theta_k / scale_k, or p_k = log(|theta_k| / scale_k) for a parameter
-// whose bounds keep one sign.
-class Coordinates {
- public:
-  Coordinates(const ParameterSet& set, const FreeParameters& free, bool logarithmic)
-      : scale_(free.scales()) {
-    const int np = free.size();
-    log_.assign(np, false);
-    sign_ = Eigen::VectorXd::Ones(np);
-    lower_.resize(np);
-    upper_.resize(np);
-    for (int k = 0; k < np; ++k) {
-      const Parameter& q = set[free.indices()[k]];
-      if (logarithmic && q.lower >= 0 && q.value > 0) {
-        log_[k] = true;
-      } else if (logarithmic && q.upper <= 0 && q.value < 0) {
-        log_[k] = true;
-        sign_[k] = -1;
-      }
-      const double a = ToFilter(k, q.lower), b = ToFilter(k, q.upper);
-      lower_[k] = std::min(a, b);
-      upper_[k] = std::max(a, b);
-    }
-  }
-  bool logarithmic(int k) const { return log_[k]; }
-  double ToFilter(int k, double theta) const {
-    if (!log_[k]) return theta / scale_[k];
-    const double r = sign_[k] * theta / scale_[k];
-    return r > 0 ? std::log(r) : -std::numeric_limits<double>::infinity();
-  }
-  Eigen::VectorXd ToFilter(const Eigen::VectorXd& theta) const {
-    Eigen::VectorXd p(theta.size());
-    for (int k = 0; k < p.size(); ++k) p[k] = ToFilter(k, theta[k]);
-    return p;
-  }
-  Eigen::VectorXd Theta(const Eigen::VectorXd& p) const {
-    Eigen::VectorXd theta(p.size());
-    for (int k = 0; k < p.size(); ++k) {
-      theta[k] = log_[k] ? sign_[k] * scale_[k] * std::exp(p[k]) : scale_[k] * p[k];
-    }
-    return theta;
-  }
-  // d theta / d p.
-  Eigen::VectorXd Jacobian(const Eigen::VectorXd& p) const {
-    Eigen::VectorXd j(p.size());
-    for (int k = 0; k < p.size(); ++k) {
-      j[k] = log_[k] ? sign_[k] * scale_[k] * std::exp(p[k]) : scale_[k];
-    }
-    return j;
-  }
-  const Eigen::VectorXd& lower() const { return lower_; }
-  const Eigen::VectorXd& upper() const { return upper_; }
-
- private:
-  Eigen::VectorXd scale_, sign_, lower_, upper_;
-  std::vector<bool> log_;
-};
-
 struct ChannelAccumulator {
   double nis = 0, innovation_squares = 0;
   long count = 0;
@@ -203,204 +144,126 @@ bool EkfOptions::IsValid(std::string* why) const {
   return true;
 }
 
-EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
-                 const NoiseWeights& noise, const EkfOptions& options) {
-  const Clock::time_point start = Clock::now();
-  std::string why;
-  if (!options.IsValid(&why)) throw InputError("EKF options: " + why);
-  if (logs.empty()) throw InputError("EKF: no log to estimate from");
-  long total_rows = 0;
-  for (const EstimationLog& log : logs) {
-    if (log.kind != LogKind::kFlight) {
-      throw InputError(log.source + ": a " + LogKindName(log.kind) +
-                       " log; the EKF estimates from flight logs (states and parameters "
-                       "together); balance logs are for linear_kf and output_error");
-    }
-    if (log.NumRows() < 2) throw InputError(log.source + ": fewer than two rows");
-    for (const std::string& name : log.channel_names) {
-      auto it = noise.std.find(name);
-      if (it == noise.std.end() || !(it->second > 0 && std::isfinite(it->second))) {
-        throw InputError(log.source + ": no positive measurement noise level for channel " +
-                         name);
-      }
-    }
-    total_rows += log.NumRows();
-  }
-  for (const auto* by_name : {&options.parameter_psd_by_name,
-                              &options.initial_parameter_std_by_name}) {
-    for (const auto& entry : *by_name) {
-      if (!vehicle.parameters.Has(entry.first)) {
-        throw InputError("EKF options name an unknown parameter '" + entry.first + "'");
-      }
-    }
-  }
 
-  EkfResult result;
-  result.parameters = vehicle.parameters;
+namespace {
 
-  // Scale (model.md, decision 8).
-  result.scale = FindScaleDirection(vehicle.model, result.parameters, SamplePoints(logs));
-  if (result.scale.exists) {
-    std::vector<std::string> names, fixed;
-    for (int i : result.scale.group) {
-      names.push_back(result.parameters[i].name);
-      if (!result.parameters[i].estimated) fixed.push_back(result.parameters[i].name);
-    }
-    std::string list;
-    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-    const std::string group_note = "Flight logs determine only ratios of " + list +
-                                   " (scaling them together leaves every flight output "
-                                   "unchanged; model.md decision 8).";
-    if (fixed.empty() && options.scale_anchor == EkfOptions::ScaleAnchor::kHubDistance) {
-      result.parameters.SetEstimated(BaseParameterName(kHubDistance), false);
-      result.anchored = BaseParameterName(kHubDistance);
-      char buffer[96];
-      std::snprintf(buffer, sizeof buffer, "%g m", result.parameters[kHubDistance].value);
-      result.notes.push_back(
-          group_note + " d is held fixed at its config value (" + buffer +
-          ") to fix the scale; the other members are estimates relative to that d: multiply "
-          "them by d_true / d_config if d is measured differently, or use the ratios reported. "
-          "A balance log fixes the scale (linear_kf / output_error).");
-    } else if (fixed.empty()) {
-      result.notes.push_back(group_note + " All of them were augmented (no anchor): the "
-                             "filter reports the undetermined direction and no std for the "
-                             "parameters along it.");
-    } else {
-      std::string held;
-      for (const std::string& n : fixed) held += (held.empty() ? "" : ", ") + n;
-      result.notes.push_back(group_note + " The scale is fixed by " + held +
-                             " (estimated: false in the config).");
-    }
-  }
+// What every pass shares.
+struct Problem {
+  const Vehicle& vehicle;
+  const std::vector<EstimationLog>& logs;
+  const NoiseWeights& noise;
+  const EkfOptions& options;
+  const FreeParameters& free;
+  Eigen::VectorXd lower, upper;  // scaled bounds
+  Eigen::VectorXd qp;            // parameter random walk, scaled
+  Eigen::MatrixXd prior;         // parameter prior covariance, scaled
+  Eigen::Matrix<double, kNumStates, 1> qx;
+  long total_rows = 0;  // over every pass, for progress
+};
 
-  const FreeParameters free(result.parameters);
+// What a pass records in the histories.
+struct PassRecord {
+  bool states = false;           // states (and smoothed ones when smoothing)
+  bool parameters = false;       // the recursive parameter estimates
+  bool std_at_estimate = false;  // the covariance pass's parameter std
+  bool innovations = false;      // innovations, NIS statistics, log-likelihood
+};
+
+struct PassResult {
+  bool ok = true;
+  std::string failure;
+  double failure_time = 0;
+  Eigen::VectorXd z;  // final augmented state
+  Eigen::MatrixXd P;  // and covariance
+  std::map<std::string, ChannelAccumulator> channel_stats;
+  double total_nis = 0, log_likelihood = 0;
+  long total_dof = 0, clamped = 0, updates = 0;
+  double propagation_s = 0, update_s = 0, smoother_s = 0;
+  EkfPropagator::Counters counters;
+  Integrator::Stats integrator;
+};
+
+// One pass of the filter over every log, from parameters p_start (scaled)
+// with the prior covariance. freeze: keep the parameters' mean (covariance
+// pass). smooth: run the RTS smoother at the end.
+PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freeze, bool smooth,
+                   const PassRecord& rec, std::vector<EkfLogHistory>* histories,
+                   long* rows_done) {
+  const EkfOptions& options = pb.options;
+  const FreeParameters& free = pb.free;
   const int np = free.size();
   const int n = kNumStates + np;
-  result.free_names = free.names();
-  result.free_indices = free.indices();
-  result.scales = free.scales();
-  const Coordinates coordinates(result.parameters, free, options.logarithmic_parameters);
-  const Eigen::VectorXd& lower = coordinates.lower();
-  const Eigen::VectorXd& upper = coordinates.upper();
-  Eigen::VectorXd free_values(np);
-  for (int k = 0; k < np; ++k) free_values[k] = result.parameters[free.indices()[k]].value;
-  const Eigen::VectorXd p0 = coordinates.ToFilter(free_values);
-  // d p / d (theta / scale) at the start: converts scaled-unit options.
-  const Eigen::VectorXd to_filter =
-      free.scales().cwiseQuotient(coordinates.Jacobian(p0)).cwiseAbs();
+  const Eigen::VectorXd& scales = free.scales();
+  PassResult out;
 
-  // Prior and random walk of the parameters, in the filter's coordinates.
-  Eigen::VectorXd prior_std(np), qp(np);
-  for (int k = 0; k < np; ++k) {
-    const std::string& name = free.names()[k];
-    auto s = options.initial_parameter_std_by_name.find(name);
-    prior_std[k] = (s != options.initial_parameter_std_by_name.end()
-                        ? s->second / free.scales()[k]
-                        : options.initial_parameter_std) *
-                   to_filter[k];
-    auto q = options.parameter_psd_by_name.find(name);
-    qp[k] = (q != options.parameter_psd_by_name.end() ? q->second : options.parameter_psd) *
-            to_filter[k] * to_filter[k];
-  }
-  const Eigen::MatrixXd prior_filter = prior_std.cwiseAbs2().asDiagonal();
-  // Scaled coordinates for the result: C_scaled = D C_filter D, D = diag(dtheta/dp / scale).
-  auto to_scaled = [&](const Eigen::VectorXd& p, const Eigen::MatrixXd& C) -> Eigen::MatrixXd {
-    const Eigen::VectorXd D = coordinates.Jacobian(p).cwiseQuotient(free.scales());
-    return D.asDiagonal() * C * D.asDiagonal();
-  };
-  result.prior_covariance = to_scaled(p0, prior_filter);
-  Eigen::Matrix<double, kNumStates, 1> qx;
-  for (int i = 0; i < kNumStates; ++i) qx[i] = options.state_psd[i];
-
-  EkfPropagator propagator(vehicle.model, result.parameters.Values(), free.indices(),
-                           coordinates.Jacobian(p0), qx, qp, options.transition, options.integrator,
-                           options.max_substep_s);
+  Eigen::VectorXd theta = pb.vehicle.parameters.Values();
+  for (int k = 0; k < np; ++k) theta[free.indices()[k]] = p_start[k] * scales[k];
+  EkfPropagator propagator(pb.vehicle.model, theta, free.indices(), scales, pb.qx, pb.qp,
+                           options.transition, options.integrator, options.max_substep_s);
+  propagator.SetParameters(p_start.cwiseProduct(scales), scales);
+  long total_rows = 0;
+  for (const EstimationLog& log : pb.logs) total_rows += log.NumRows();
   RtsSmoother smoother(n);
-  if (options.smoother) smoother.Reserve(static_cast<int>(total_rows));
   std::vector<std::pair<int, int>> step_rows;  // (log, row) of each smoother step
-  step_rows.reserve(total_rows);
+  if (smooth) {
+    smoother.Reserve(static_cast<int>(total_rows));
+    step_rows.reserve(total_rows);
+  }
 
   Eigen::VectorXd z = Eigen::VectorXd::Zero(n);
   Eigen::MatrixXd P = Eigen::MatrixXd::Zero(n, n);
-  z.tail(np) = p0;
-  P.bottomRightCorner(np, np) = prior_filter;
-  Eigen::VectorXd dtheta_dp = coordinates.Jacobian(p0);
-  for (int k = 0; k < np; ++k) {
-    if (!(z[kNumStates + k] >= lower[k] && z[kNumStates + k] <= upper[k])) {
-      throw InputError("initial value of " + free.names()[k] + " lies outside its bounds");
-    }
-  }
+  z.tail(np) = p_start;
+  P.bottomRightCorner(np, np) = pb.prior;
 
   // Workspace.
   Eigen::VectorXd z_pred(n);
   Eigen::MatrixXd P_pred(n, n), Phi = Eigen::MatrixXd::Identity(n, n);
   EkfTransition transition;
-  Eigen::MatrixXd H, HP, S, K, IKH(n, n), T(n, n);
+  Eigen::MatrixXd H, HP, S, K, THt, T(n, n);
   Eigen::VectorXd nu, r_diag;
   Eigen::Matrix<double, kNumFlightChannels, 1> y_hat;
   Eigen::Matrix<double, 3, Eigen::Dynamic> H_acc;
   Eigen::LLT<Eigen::MatrixXd> llt;
   std::vector<int> present;  // columns of the log measured in this row
-
-  result.logs.resize(logs.size());
-  std::map<std::string, ChannelAccumulator> channel_stats;
-  double total_nis = 0;
-  long total_dof = 0;
   std::deque<std::pair<double, std::pair<double, int>>> window;  // (t, (nis, dof))
   double window_nis = 0;
   long window_dof = 0;
-  long rows_done = 0;
-  double propagation_s = 0, update_s = 0;
+  std::string why;
 
   auto fail = [&](double t, const EstimationLog& log, int row, const std::string& reason) {
-    result.usable = false;
-    result.failure_time = t;
-    result.failure = "EKF failed at " + Time(t) + " in " + log.source + " (row " +
-                     std::to_string(log.first_log_row + row + 1) + " of the log): " + reason;
-    result.total_s = Seconds(start, Clock::now());
-    return result;
+    out.ok = false;
+    out.failure_time = t;
+    out.failure = "EKF failed at " + Time(t) + " in " + log.source + " (row " +
+                  std::to_string(log.first_log_row + row + 1) + " of the log): " + reason;
+    return out;
   };
 
-  for (size_t L = 0; L < logs.size(); ++L) {
-    const EstimationLog& log = logs[L];
+  for (size_t L = 0; L < pb.logs.size(); ++L) {
+    const EstimationLog& log = pb.logs[L];
     const int N = log.NumRows();
     const int m_all = log.NumChannels();
-    EkfLogHistory& h = result.logs[L];
-    h.source = log.source;
-    h.name = log.name;
-    h.times = log.inputs.times();
-    h.channels = log.channels;
-    h.channel_names = log.channel_names;
-    h.measured = log.values;
-    h.filtered_states.setConstant(N, kNumStates, kNaN);
-    h.filtered_state_std.setConstant(N, kNumStates, kNaN);
-    h.parameters.setConstant(N, np, kNaN);
-    h.parameter_std.setConstant(N, np, kNaN);
-    h.innovations.setConstant(N, m_all, kNaN);
-    h.innovation_std.setConstant(N, m_all, kNaN);
-    h.nis.assign(N, kNaN);
-    h.nis_dof.assign(N, 0);
+    EkfLogHistory& h = (*histories)[L];
     Eigen::VectorXd R(m_all);
     for (int c = 0; c < m_all; ++c) {
-      const double s = noise.std.at(log.channel_names[c]);
+      const double s = pb.noise.std.at(log.channel_names[c]);
       R[c] = s * s;
     }
     auto record = [&](int row) {
-      h.filtered_states.row(row) = z.head<kNumStates>().transpose();
-      h.filtered_state_std.row(row) =
-          P.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt().transpose();
-      if (np > 0) {
-        h.parameters.row(row) = coordinates.Theta(z.tail(np)).transpose();
-        h.parameter_std.row(row) = P.diagonal()
-                                       .tail(np)
-                                       .cwiseMax(0.0)
-                                       .cwiseSqrt()
-                                       .cwiseProduct(coordinates.Jacobian(z.tail(np)).cwiseAbs())
-                                       .transpose();
+      if (rec.states) {
+        h.states.row(row) = z.head<kNumStates>().transpose();
+        h.state_std.row(row) = P.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt().transpose();
       }
+      if (np == 0) return;
+      const Eigen::VectorXd p_std = P.diagonal().tail(np).cwiseMax(0.0).cwiseSqrt().cwiseProduct(scales);
+      if (rec.parameters) {
+        h.parameters.row(row) = z.tail(np).cwiseProduct(scales).transpose();
+        h.parameter_std.row(row) = p_std.transpose();
+      }
+      if (rec.std_at_estimate) h.parameter_std_at_estimate.row(row) = p_std.transpose();
     };
 
-    // Row 0: the initial state, P0 = R for the states it holds.
+    // Row 0: the initial state, P0 = R for the states it holds; the
+    // parameters (mean and covariance) carry over from the previous log.
     Eigen::VectorXd z0(n);
     Eigen::MatrixXd P0 = Eigen::MatrixXd::Zero(n, n);
     for (int i = 0; i < kNumStates; ++i) {
@@ -419,24 +282,27 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
     }
     z0.tail(np) = z.tail(np);
     P0.bottomRightCorner(np, np) = P.bottomRightCorner(np, np);
-    if (L > 0 && options.smoother) {
+    if (L > 0 && smooth) {
       // Log boundary: the states restart independently; the parameters carry over.
       Eigen::MatrixXd boundary = Eigen::MatrixXd::Zero(n, n);
       boundary.bottomRightCorner(np, np).setIdentity();
-      if (!smoother.AddTransition(z, P, boundary, z0, P0, &why)) return fail(h.times[0], log, 0, why);
+      const Clock::time_point c0 = Clock::now();
+      if (!smoother.AddTransition(z, P, boundary, z0, P0, &why)) {
+        return fail(log.inputs.time(0), log, 0, why);
+      }
+      out.smoother_s += Seconds(c0, Clock::now());
     }
     z = z0;
     P = P0;
-    step_rows.push_back({static_cast<int>(L), 0});
+    if (smooth) step_rows.push_back({static_cast<int>(L), 0});
     record(0);
-    ++rows_done;
+    ++*rows_done;
 
     for (int k = 1; k < N; ++k) {
-      const double t0 = h.times[k - 1], t1 = h.times[k];
+      const double t0 = log.inputs.time(k - 1), t1 = log.inputs.time(k);
       // Predict over the hold interval [t_{k-1}, t_k) with u_{k-1}.
-      Clock::time_point c0 = Clock::now();
-      dtheta_dp = coordinates.Jacobian(z.tail(np));
-      propagator.SetParameters(coordinates.Theta(z.tail(np)), dtheta_dp);
+      const Clock::time_point c0 = Clock::now();
+      if (!freeze) propagator.SetParameters(z.tail(np).cwiseProduct(scales), scales);
       const State x = z.head<kNumStates>();
       if (!propagator.Propagate(t0, t1, log.inputs.input(k - 1), x, &transition)) {
         return fail(t0, log, k - 1,
@@ -447,6 +313,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
       z_pred.head<kNumStates>() = transition.x;
       z_pred.tail(np) = z.tail(np);
       {
+        // P <- Phi P Phi^T + Qd with Phi = [[A, B], [0, I]], block by block.
         const auto Pxx = P.topLeftCorner<kNumStates, kNumStates>();
         const auto Pxp = P.topRightCorner(kNumStates, np);
         const auto Ppp = P.bottomRightCorner(np, np);
@@ -462,18 +329,20 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
         P_pred.topRightCorner(kNumStates, np) = Nxp + transition.Qxp;
         P_pred.bottomLeftCorner(np, kNumStates) = P_pred.topRightCorner(kNumStates, np).transpose();
         P_pred.bottomRightCorner(np, np) = Ppp;
-        P_pred.bottomRightCorner(np, np).diagonal() += (t1 - t0) * qp;
+        P_pred.bottomRightCorner(np, np).diagonal() += (t1 - t0) * pb.qp;
       }
-      if (options.smoother) {
+      const Clock::time_point c1 = Clock::now();
+      out.propagation_s += Seconds(c0, c1);
+      if (smooth) {
         Phi.topLeftCorner<kNumStates, kNumStates>() = A;
         Phi.topRightCorner(kNumStates, np) = B;
         if (!smoother.AddTransition(z, P, Phi, z_pred, P_pred, &why)) return fail(t1, log, k, why);
+        step_rows.push_back({static_cast<int>(L), k});
       }
       z = z_pred;
       P = P_pred;
-      step_rows.push_back({static_cast<int>(L), k});
-      Clock::time_point c1 = Clock::now();
-      propagation_s += Seconds(c0, c1);
+      const Clock::time_point c2 = Clock::now();
+      out.smoother_s += Seconds(c1, c2);
 
       // Update with the channels row k holds.
       present.clear();
@@ -487,8 +356,8 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
       const int m = static_cast<int>(present.size());
       if (m > 0) {
         const State x_pred = z.head<kNumStates>();
-        if (!FlightOutputsAndJacobian(vehicle.model, propagator.theta(), free.indices(),
-                                      dtheta_dp, x_pred, log.inputs.input(k), &y_hat,
+        if (!FlightOutputsAndJacobian(pb.vehicle.model, propagator.theta(), free.indices(),
+                                      scales, x_pred, log.inputs.input(k), &y_hat,
                                       need_acc ? &H_acc : nullptr)) {
           return fail(t1, log, k, "output model not finite (state or parameters blown up)");
         }
@@ -518,44 +387,51 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
         }
         K = llt.solve(HP).transpose();  // n x m
         const double nis = llt.matrixL().solve(nu).squaredNorm();
-        result.log_likelihood -=
-            0.5 * (nis + 2 * llt.matrixLLT().diagonal().array().log().sum() + m * std::log(2 * M_PI));
-        if (options.freeze_parameter_mean) {
+        if (freeze) {
           z.head<kNumStates>().noalias() += K.topRows<kNumStates>() * nu;
         } else {
           z.noalias() += K * nu;
         }
-        // Joseph form.
-        IKH.setIdentity();
-        IKH.noalias() -= K * H;
-        T.noalias() = IKH * P;
-        P.noalias() = T * IKH.transpose();
-        P.noalias() += K * r_diag.asDiagonal() * K.transpose();
+        // Joseph form, (I - K H) P (I - K H)^T + K R K^T, evaluated as
+        // T - (T H^T - K R) K^T with T = (I - K H) P = P - K (H P): the same
+        // matrix in O(n^2 m) instead of O(n^3).
+        T = P;
+        T.noalias() -= K * HP;
+        THt.noalias() = T * H.transpose();
+        THt.noalias() -= K * r_diag.asDiagonal();
+        P = T;
+        P.noalias() -= THt * K.transpose();
         P = 0.5 * (P + P.transpose()).eval();
-        for (int j = 0; j < np; ++j) {
-          double& v = z[kNumStates + j];
-          if (v < lower[j] || v > upper[j]) {
-            v = std::clamp(v, lower[j], upper[j]);
-            ++result.clamped;
+        if (!freeze) {
+          for (int j = 0; j < np; ++j) {
+            double& v = z[kNumStates + j];
+            if (v < pb.lower[j] || v > pb.upper[j]) {
+              v = std::clamp(v, pb.lower[j], pb.upper[j]);
+              ++out.clamped;
+            }
           }
         }
-        ++result.updates;
-        h.nis[k] = nis;
-        h.nis_dof[k] = m;
-        const bool counted = t1 - h.times[0] >= options.nis_burn_in_s;
-        for (int j = 0; j < m; ++j) {
-          h.innovations(k, present[j]) = nu[j];
-          h.innovation_std(k, present[j]) = std::sqrt(S(j, j));
+        ++out.updates;
+        if (rec.innovations) {
+          out.log_likelihood -= 0.5 * (nis + 2 * llt.matrixLLT().diagonal().array().log().sum() +
+                                       m * std::log(2 * M_PI));
+          h.nis[k] = nis;
+          h.nis_dof[k] = m;
+          const bool counted = t1 - log.inputs.time(0) >= options.nis_burn_in_s;
+          for (int j = 0; j < m; ++j) {
+            h.innovations(k, present[j]) = nu[j];
+            h.innovation_std(k, present[j]) = std::sqrt(S(j, j));
+            if (counted) {
+              ChannelAccumulator& a = out.channel_stats[log.channel_names[present[j]]];
+              a.nis += nu[j] * nu[j] / S(j, j);
+              a.innovation_squares += nu[j] * nu[j];
+              ++a.count;
+            }
+          }
           if (counted) {
-            ChannelAccumulator& a = channel_stats[log.channel_names[present[j]]];
-            a.nis += nu[j] * nu[j] / S(j, j);
-            a.innovation_squares += nu[j] * nu[j];
-            ++a.count;
+            out.total_nis += nis;
+            out.total_dof += m;
           }
-        }
-        if (counted) {
-          total_nis += nis;
-          total_dof += m;
         }
         // Divergence watch.
         window.push_back({t1, {nis, m}});
@@ -566,9 +442,9 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
           window_dof -= window.front().second.second;
           window.pop_front();
         }
-        if (t1 - h.times[0] >= options.divergence_window_s && window_dof > 0 &&
+        if (t1 - log.inputs.time(0) >= options.divergence_window_s && window_dof > 0 &&
             window_nis / window_dof > options.divergence_nis) {
-          char buffer[160];
+          char buffer[200];
           std::snprintf(buffer, sizeof buffer,
                         "diverged: mean normalised innovation squared %.3g per degree of "
                         "freedom over the last %.3g s (expected 1, limit %.3g)",
@@ -580,119 +456,291 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
       if (!z.allFinite() || !P.allFinite() || (P.diagonal().array() <= 0).any()) {
         return fail(t1, log, k, "state or covariance not finite or not positive");
       }
-      update_s += Seconds(c1, Clock::now());
+      out.update_s += Seconds(c2, Clock::now());
       record(k);
-      ++rows_done;
-      if (options.progress && rows_done % options.progress_every_rows == 0) {
-        options.progress(rows_done, total_rows);
+      ++*rows_done;
+      if (options.progress && *rows_done % options.progress_every_rows == 0) {
+        options.progress(*rows_done, pb.total_rows);
       }
     }
     window.clear();
     window_nis = 0;
     window_dof = 0;
   }
-  if (options.progress && rows_done % options.progress_every_rows != 0) {
-    options.progress(rows_done, total_rows);
-  }
   {
     const Eigen::LLT<Eigen::MatrixXd> check(P);
     if (check.info() != Eigen::Success) {
-      const EstimationLog& log = logs.back();
+      const EstimationLog& log = pb.logs.back();
       return fail(log.inputs.times().back(), log, log.NumRows() - 1,
                   "final covariance not positive definite");
     }
   }
-
-  // Final estimates: the filtered values at the end (= smoothed there).
-  const Eigen::VectorXd p_final = z.tail(np);
-  const Eigen::MatrixXd covariance_filter = P.bottomRightCorner(np, np);
-  result.covariance = to_scaled(p_final, covariance_filter);
-  result.estimate = coordinates.Theta(p_final);
-  result.estimate_std = result.covariance.diagonal().cwiseSqrt().cwiseProduct(free.scales());
-  for (int k = 0; k < np; ++k) result.parameters.SetValue(free.names()[k], result.estimate[k]);
-  result.estimates_from = std::string("filtered at the end of the last log") +
-                          (options.smoother ? " (equal to the smoothed value there)" : "");
-
-  // Smoother.
-  if (options.smoother) {
+  if (smooth) {
     const Clock::time_point c0 = Clock::now();
-    for (EkfLogHistory& h : result.logs) {
-      const int N = static_cast<int>(h.times.size());
-      h.smoothed_states.setConstant(N, kNumStates, kNaN);
-      h.smoothed_state_std.setConstant(N, kNumStates, kNaN);
-      h.smoothed_parameters.setConstant(N, np, kNaN);
-      h.smoothed_parameter_std.setConstant(N, np, kNaN);
-    }
     CHECK_EQ(static_cast<size_t>(smoother.size() + 1), step_rows.size());
     smoother.Smooth(z, P, [&](int step, const Eigen::VectorXd& xs, const Eigen::MatrixXd& Ps) {
       const auto [L, row] = step_rows[step];
-      EkfLogHistory& h = result.logs[L];
+      EkfLogHistory& h = (*histories)[L];
       h.smoothed_states.row(row) = xs.head<kNumStates>().transpose();
       h.smoothed_state_std.row(row) =
           Ps.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt().transpose();
-      if (np > 0) {
-        h.smoothed_parameters.row(row) = coordinates.Theta(xs.tail(np)).transpose();
-        h.smoothed_parameter_std.row(row) = Ps.diagonal()
-                                                .tail(np)
-                                                .cwiseMax(0.0)
-                                                .cwiseSqrt()
-                                                .cwiseProduct(coordinates.Jacobian(xs.tail(np)).cwiseAbs())
-                                                .transpose();
-      }
     });
-    result.smoother_s = Seconds(c0, Clock::now());
+    out.smoother_s += Seconds(c0, Clock::now());
   }
+  out.z = z;
+  out.P = P;
+  out.counters = propagator.counters();
+  out.integrator = propagator.integrator_stats();
+  return out;
+}
 
-  // Identifiability.
-  // In the filter's coordinates (where the prior is diagonal); directions
-  // reported in scaled coordinates.
-  Eigen::VectorXd scale_filter;
-  if (result.scale.exists) {
-    const Eigen::VectorXd j = coordinates.Jacobian(p_final);
-    scale_filter.resize(np);
-    for (int k = 0; k < np; ++k) scale_filter[k] = result.scale.direction[free.indices()[k]] / j[k];
+std::string Join(const std::vector<std::string>& names) {
+  std::string list;
+  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+  return list;
+}
+
+}  // namespace
+
+EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
+                 const NoiseWeights& noise, const EkfOptions& options) {
+  const Clock::time_point start = Clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("EKF options: " + why);
+  if (logs.empty()) throw InputError("EKF: no log to estimate from");
+  long rows_per_pass = 0;
+  for (const EstimationLog& log : logs) {
+    if (log.kind != LogKind::kFlight) {
+      throw InputError(log.source + ": a " + LogKindName(log.kind) +
+                       " log; the EKF estimates from flight logs (states and parameters "
+                       "together); balance logs are for linear_kf and output_error");
+    }
+    if (log.NumRows() < 2) throw InputError(log.source + ": fewer than two rows");
+    for (const std::string& name : log.channel_names) {
+      auto it = noise.std.find(name);
+      if (it == noise.std.end() || !(it->second > 0 && std::isfinite(it->second))) {
+        throw InputError(log.source + ": no positive measurement noise level for channel " +
+                         name);
+      }
+    }
+    rows_per_pass += log.NumRows();
   }
-  result.undetermined = FindUndeterminedDirections(
-      prior_filter, covariance_filter, options.undetermined_variance_ratio, scale_filter);
-  for (UndeterminedDirection& d : result.undetermined) {
-    d.direction = d.direction.cwiseProduct(coordinates.Jacobian(p_final))
-                      .cwiseQuotient(free.scales())
-                      .normalized();
-    int largest;
-    d.direction.cwiseAbs().maxCoeff(&largest);
-    if (d.direction[largest] < 0) d.direction = -d.direction;
-  }
-  result.identifiable.assign(np, true);
-  for (const UndeterminedDirection& d : result.undetermined) {
-    // A parameter with a tenth of the direction's weight moves along it.
-    for (int k = 0; k < np; ++k) {
-      if (std::fabs(d.direction[k]) > 0.1) result.identifiable[k] = false;
+  for (const auto* by_name :
+       {&options.parameter_psd_by_name, &options.initial_parameter_std_by_name}) {
+    for (const auto& entry : *by_name) {
+      if (!vehicle.parameters.Has(entry.first)) {
+        throw InputError("EKF options name an unknown parameter '" + entry.first + "'");
+      }
     }
   }
+
+  EkfResult result;
+  result.parameters = vehicle.parameters;
+
+  // Scale (model.md, decision 8).
+  result.scale = FindScaleDirection(vehicle.model, result.parameters, SamplePoints(logs));
+  if (result.scale.exists) {
+    std::vector<std::string> names, fixed;
+    for (int i : result.scale.group) {
+      names.push_back(result.parameters[i].name);
+      if (!result.parameters[i].estimated) fixed.push_back(result.parameters[i].name);
+    }
+    const std::string group_note = "Flight logs determine only ratios of " + Join(names) +
+                                   " (scaling them together leaves every flight output "
+                                   "unchanged; model.md decision 8).";
+    if (fixed.empty() && options.scale_anchor == EkfOptions::ScaleAnchor::kHubDistance) {
+      result.parameters.SetEstimated(BaseParameterName(kHubDistance), false);
+      result.anchored = BaseParameterName(kHubDistance);
+      char buffer[64];
+      std::snprintf(buffer, sizeof buffer, "%g m", result.parameters[kHubDistance].value);
+      result.notes.push_back(
+          group_note + " d is held fixed at its config value (" + buffer +
+          ") to fix the scale; the other members are estimates relative to that d (multiply "
+          "them by d_true / d_config if d is measured differently) and the scale-free ratios "
+          "are reported. A balance log fixes the scale (linear_kf, output_error).");
+    } else if (fixed.empty()) {
+      result.notes.push_back(group_note +
+                             " All of them were augmented (no scale anchor): the undetermined "
+                             "direction is reported and the parameters along it get no std.");
+    } else {
+      result.notes.push_back(group_note + " The scale is fixed by " + Join(fixed) +
+                             " (estimated: false in the config).");
+    }
+  }
+
+  const FreeParameters free(result.parameters);
+  const int np = free.size();
+  result.free_names = free.names();
+  result.free_indices = free.indices();
+  result.scales = free.scales();
+  result.covariance_pass = options.covariance_pass;
+
+  // The parameter set of the passes: the anchor's `estimated` flag applied.
+  Vehicle anchored = vehicle;
+  anchored.parameters = result.parameters;
+  Problem problem{anchored, logs, noise, options, free};
+  problem.lower = free.ScaledLower();
+  problem.upper = free.ScaledUpper();
+  const Eigen::VectorXd p0 = free.ScaledValues();
+  for (int k = 0; k < np; ++k) {
+    if (!(p0[k] >= problem.lower[k] && p0[k] <= problem.upper[k])) {
+      throw InputError("initial value of " + free.names()[k] + " lies outside its bounds");
+    }
+  }
+  Eigen::VectorXd prior_std(np);
+  problem.qp.resize(np);
+  for (int k = 0; k < np; ++k) {
+    const std::string& name = free.names()[k];
+    auto s = options.initial_parameter_std_by_name.find(name);
+    prior_std[k] = s != options.initial_parameter_std_by_name.end()
+                       ? s->second / free.scales()[k]
+                       : options.initial_parameter_std;
+    auto q = options.parameter_psd_by_name.find(name);
+    problem.qp[k] = q != options.parameter_psd_by_name.end() ? q->second : options.parameter_psd;
+  }
+  problem.prior = prior_std.cwiseAbs2().asDiagonal();
+  result.prior_covariance = problem.prior;
+  for (int i = 0; i < kNumStates; ++i) problem.qx[i] = options.state_psd[i];
+  const int passes = options.covariance_pass ? 2 : 1;
+  problem.total_rows = rows_per_pass * passes;
+
+  // Histories.
+  result.logs.resize(logs.size());
+  for (size_t L = 0; L < logs.size(); ++L) {
+    const EstimationLog& log = logs[L];
+    EkfLogHistory& h = result.logs[L];
+    const int N = log.NumRows(), m = log.NumChannels();
+    h.source = log.source;
+    h.name = log.name;
+    h.times = log.inputs.times();
+    h.channels = log.channels;
+    h.channel_names = log.channel_names;
+    h.measured = log.values;
+    h.states.setConstant(N, kNumStates, kNaN);
+    h.state_std.setConstant(N, kNumStates, kNaN);
+    if (options.smoother) {
+      h.smoothed_states.setConstant(N, kNumStates, kNaN);
+      h.smoothed_state_std.setConstant(N, kNumStates, kNaN);
+    }
+    h.parameters.setConstant(N, np, kNaN);
+    h.parameter_std.setConstant(N, np, kNaN);
+    if (options.covariance_pass) h.parameter_std_at_estimate.setConstant(N, np, kNaN);
+    h.innovations.setConstant(N, m, kNaN);
+    h.innovation_std.setConstant(N, m, kNaN);
+    h.nis.assign(N, kNaN);
+    h.nis_dof.assign(N, 0);
+  }
+
+  long rows_done = 0;
+  auto failed = [&](const PassResult& pass) {
+    result.usable = false;
+    result.failure = pass.failure;
+    result.failure_time = pass.failure_time;
+    result.total_s = Seconds(start, Clock::now());
+    return result;
+  };
+  auto add_effort = [&](const PassResult& pass) {
+    result.propagation_s += pass.propagation_s;
+    result.update_s += pass.update_s;
+    result.smoother_s += pass.smoother_s;
+    result.updates += pass.updates;
+    result.propagation.intervals += pass.counters.intervals;
+    result.propagation.substeps += pass.counters.substeps;
+    result.propagation.jacobians += pass.counters.jacobians;
+    result.integrator.steps += pass.integrator.steps;
+    result.integrator.rhs_evals += pass.integrator.rhs_evals;
+    result.integrator.jac_evals += pass.integrator.jac_evals;
+    result.integrator.restarts += pass.integrator.restarts;
+  };
+
+  // Pass 1: estimation.
+  PassRecord record1;
+  record1.parameters = true;
+  record1.innovations = true;
+  record1.states = !options.covariance_pass;
+  const Clock::time_point c1 = Clock::now();
+  const PassResult pass1 = RunPass(problem, p0, false, options.smoother && !options.covariance_pass,
+                                   record1, &result.logs, &rows_done);
+  result.estimation_pass_s = Seconds(c1, Clock::now());
+  if (!pass1.ok) return failed(pass1);
+  add_effort(pass1);
+  const Eigen::VectorXd p_final = pass1.z.tail(np);
+  result.estimate = p_final.cwiseProduct(free.scales());
+  result.filter_std =
+      pass1.P.diagonal().tail(np).cwiseMax(0.0).cwiseSqrt().cwiseProduct(free.scales());
+  for (int k = 0; k < np; ++k) result.parameters.SetValue(free.names()[k], result.estimate[k]);
+  Eigen::MatrixXd covariance = pass1.P.bottomRightCorner(np, np);
+
+  // Pass 2: covariance at the estimate (and the reported states).
+  if (options.covariance_pass) {
+    PassRecord record2;
+    record2.states = true;
+    record2.std_at_estimate = true;
+    Vehicle at_estimate = anchored;
+    at_estimate.parameters = result.parameters;
+    const Problem problem2{at_estimate, logs, noise, options, free, problem.lower, problem.upper,
+                           problem.qp, problem.prior, problem.qx, problem.total_rows};
+    const Clock::time_point c2 = Clock::now();
+    const PassResult pass2 =
+        RunPass(problem2, p_final, true, options.smoother, record2, &result.logs, &rows_done);
+    result.covariance_pass_s = Seconds(c2, Clock::now());
+    if (!pass2.ok) return failed(pass2);
+    add_effort(pass2);
+    covariance = pass2.P.bottomRightCorner(np, np);
+  }
+  if (options.progress && rows_done % options.progress_every_rows != 0) {
+    options.progress(rows_done, problem.total_rows);
+  }
+  result.covariance = covariance;
+  result.estimate_std = covariance.diagonal().cwiseMax(0.0).cwiseSqrt().cwiseProduct(free.scales());
+  result.estimates_from =
+      std::string("the filter's estimate at the end of the last log") +
+      (options.smoother ? " (equal to the smoothed value there)" : "") +
+      (options.covariance_pass
+           ? "; std from a second pass linearised at that estimate (covariance pass)"
+           : "; std from the filter");
+  result.clamped = pass1.clamped;
+  result.log_likelihood = pass1.log_likelihood;
+  result.rows = rows_per_pass;
+
+  // Identifiability.
+  Eigen::VectorXd scale_scaled;
+  if (result.scale.exists) {
+    scale_scaled.resize(np);
+    for (int k = 0; k < np; ++k) {
+      scale_scaled[k] = result.scale.direction[free.indices()[k]] / free.scales()[k];
+    }
+  }
+  result.undetermined = FindUndeterminedDirections(
+      result.prior_covariance, result.covariance, options.undetermined_variance_ratio,
+      scale_scaled);
+  result.identifiable.assign(np, true);
   for (const UndeterminedDirection& d : result.undetermined) {
     std::string loads;
     for (int k = 0; k < np; ++k) {
+      // A parameter with a tenth of the direction's weight moves along it.
       if (std::fabs(d.direction[k]) > 0.1) {
+        result.identifiable[k] = false;
         char buffer[64];
         std::snprintf(buffer, sizeof buffer, "%s%s %+.2f", loads.empty() ? "" : ", ",
                       free.names()[k].c_str(), d.direction[k]);
         loads += buffer;
       }
     }
-    char buffer[160];
+    char buffer[200];
     std::snprintf(buffer, sizeof buffer,
-                  "Undetermined direction (final/prior variance %.2f; |cos| to the scale "
-                  "direction %.3f): ",
+                  "Undetermined direction (final / prior variance %.2f; |cos| to the scale "
+                  "direction of model.md decision 8: %.3f), scaled coordinates: ",
                   d.variance_ratio, d.cos_to_scale);
     result.notes.push_back(buffer + loads +
-                           ". The parameters along it are not separately identifiable from "
-                           "these logs; no std is reported for them.");
+                           ". These parameters are not separately identifiable from these "
+                           "logs; no std is reported for them.");
   }
   result.ratios = ScaleRatios(result.scale, result.parameters, free.indices(), free.scales(),
                               result.covariance);
 
-  // Consistency.
-  for (const auto& [name, a] : channel_stats) {
+  // Consistency (pass 1).
+  for (const auto& [name, a] : pass1.channel_stats) {
     NisStatistic s;
     s.channel = name;
     s.dof = a.count;
@@ -702,35 +750,26 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
     result.channel_nis.push_back(s);
   }
   result.total_nis.channel = "all";
-  result.total_nis.dof = total_dof;
-  result.total_nis.mean = total_dof > 0 ? total_nis / total_dof : kNaN;
+  result.total_nis.dof = pass1.total_dof;
+  result.total_nis.mean = pass1.total_dof > 0 ? pass1.total_nis / pass1.total_dof : kNaN;
   std::tie(result.total_nis.lower, result.total_nis.upper) =
-      ChiSquareMeanBand(static_cast<double>(total_dof));
+      ChiSquareMeanBand(static_cast<double>(pass1.total_dof));
   result.total_nis.innovation_rms = kNaN;
 
-  // Convergence: time after which each filtered parameter stays within 3 final std.
+  // Convergence: time after which each recursive estimate stays within 3 final std.
   result.settled_after_s.assign(np, 0.0);
-  {
-    double offset = 0;
-    std::vector<double> settled(np, 0.0);
-    for (const EkfLogHistory& h : result.logs) {
-      for (int k = 0; k < np; ++k) {
-        for (size_t row = 0; row < h.times.size(); ++row) {
-          if (std::fabs(h.parameters(row, k) - result.estimate[k]) > 3 * result.estimate_std[k]) {
-            settled[k] = offset + h.times[row] - h.times[0];
-          }
+  double offset = 0;
+  for (const EkfLogHistory& h : result.logs) {
+    for (int k = 0; k < np; ++k) {
+      for (size_t row = 0; row < h.times.size(); ++row) {
+        if (std::fabs(h.parameters(row, k) - result.estimate[k]) > 3 * result.estimate_std[k]) {
+          result.settled_after_s[k] = offset + h.times[row] - h.times[0];
         }
       }
-      offset += h.times.back() - h.times.front();
     }
-    result.settled_after_s = settled;
+    offset += h.times.back() - h.times.front();
   }
 
-  result.rows = rows_done;
-  result.propagation_s = propagation_s;
-  result.update_s = update_s;
-  result.propagation = propagator.counters();
-  result.integrator = propagator.integrator_stats();
   result.total_s = Seconds(start, Clock::now());
   result.usable = true;
   return result;

@@ -31,7 +31,9 @@ bool OutputErrorOptions::IsValid(std::string* why) const {
     return fail("max_iterations must be >= 1");
   }
   if (noise_relaxations < 0) return fail("noise_relaxations must be >= 0");
-  if (!(continuity_std > 0)) return fail("continuity_std must be positive");
+  if (!(continuity_std > 0 && coarse_continuity_std > 0)) {
+    return fail("continuity_std must be positive");
+  }
   if (huber_threshold < 0) return fail("huber_threshold must be >= 0");
   if (num_threads < 1) return fail("num_threads must be >= 1");
   if (balance_rows_per_block < 1) return fail("balance_rows_per_block must be >= 1");
@@ -353,8 +355,11 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
       }
       return InitialStateFromLog(logs[log_index], row);
     };
-    Assembly a = Assemble(vehicle, free, logs, noise, segment_s, options, theta_scaled.data(),
-                          start_state);
+    const bool coarse_stage = stage + 1 < static_cast<int>(options.segment_schedule_s.size());
+    OutputErrorOptions stage_options = options;
+    if (coarse_stage) stage_options.continuity_std = options.coarse_continuity_std;
+    Assembly a = Assemble(vehicle, free, logs, noise, segment_s, stage_options,
+                          theta_scaled.data(), start_state);
     char stage_name[96];
     std::snprintf(stage_name, sizeof stage_name, "output-error stage %d/%d (segments %.2f s)",
                   stage + 1, num_stages, segment_s);

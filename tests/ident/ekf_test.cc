@@ -81,7 +81,8 @@ TEST(EkfDiagnostics, Run) {
     options.integrator.relative_tolerance = Env("RTOL", 0);
     options.integrator.absolute_tolerance = Env("RTOL", 0) * 1e-2;
   }
-  if (getenv("LOGP")) options.logarithmic_parameters = atoi(getenv("LOGP")) != 0;
+  if (getenv("ONEPASS")) options.covariance_pass = false;
+  if (getenv("FREE")) options.scale_anchor = EkfOptions::ScaleAnchor::kNone;
   if (getenv("SENS")) options.transition = EkfTransitionMethod::kSensitivities;
   SimulatedFlight f = Simulate(Env("DUR", 60), static_cast<uint64_t>(Env("SEED", 5)));
   if (getenv("NOACC")) {
@@ -130,6 +131,8 @@ TEST(EkfDiagnostics, Run) {
            (r.estimate[k] - truth) / r.estimate_std[k], (int)r.identifiable[k],
            r.settled_after_s[k]);
   }
+  for (const auto& n : r.notes) printf("note: %s\n", n.c_str());
+  for (const auto& q : r.ratios) printf("ratio %s %g +- %g\n", q.name.c_str(), q.value, q.std);
   for (const auto& s : r.channel_nis) {
     printf("NIS %-6s %.4f [%.4f %.4f] n %ld rms %.4g\n", s.channel.c_str(), s.mean, s.lower,
            s.upper, s.dof, s.innovation_rms);
@@ -153,9 +156,7 @@ TEST(EkfDiagnostics, Run) {
   if (getenv("COVPASS")) {
     Vehicle w = v;
     for (size_t k = 0; k < r.free_names.size(); ++k) w.parameters.SetValue(r.free_names[k], r.estimate[k]);
-    EkfOptions o = options;
-    o.freeze_parameter_mean = true;
-    const EkfResult c = RunEkf(w, logs, TruthNoise(f.scenario), o);
+    const EkfResult& c = r;
     for (size_t k = 0; k < r.free_names.size(); ++k) {
       const double truth = anchored_truth(r.free_names[k]);
       printf("COV %-8s %+.5e +- %.2e (pass-1 std %.2e) z=%+.2f\n", r.free_names[k].c_str(), r.estimate[k], c.estimate_std[k], r.estimate_std[k], (r.estimate[k] - truth) / c.estimate_std[k]);

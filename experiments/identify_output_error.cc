@@ -1,0 +1,310 @@
+#include "experiments/identify_output_error.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/errors.h"
+#include "core/plot.h"
+#include "core/report.h"
+#include "dynamics/vehicle.h"
+#include "experiments/cli.h"
+#include "experiments/cli_flags.h"
+#include "ident/balance_holds.h"
+#include "ident/linear_baseline.h"
+#include "ident/output_error.h"
+
+DEFINE_double(segment_s, 1.0,
+              "output_error: multiple-shooting segment length and prediction window [s]");
+DEFINE_int32(noise_relaxations, 2,
+             "output_error: re-estimate the noise from the residuals and refit this many times");
+DEFINE_double(huber, 0.0, "output_error: Huber loss threshold in noise std (0: least squares)");
+DEFINE_string(start, "config",
+              "output_error: starting values: config, or linear_kf (the paper's baseline on the "
+              "balance logs)");
+
+namespace coaxid {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+void Require(const std::string& value, const char* flag) {
+  if (value.empty()) {
+    throw InputError(std::string("missing --") + flag +
+                     "\nusage: coaxid identify --method=output_error --logs=A.csv[,B.csv] "
+                     "--config=F --out=DIR [--validate=C.csv] [--holdout_fraction=0.2] "
+                     "[--segment_s=1] [--start=config|linear_kf]");
+  }
+}
+
+// The estimation and held-out parts of every log.
+struct Split {
+  std::vector<EstimationLog> estimation, validation;
+  std::string description;
+};
+
+Split SplitLogs(const std::vector<Log>& logs, const std::vector<Log>& validate) {
+  Split s;
+  if (!validate.empty()) {
+    for (const Log& log : logs) s.estimation.push_back(MakeEstimationLog(log));
+    for (const Log& log : validate) s.validation.push_back(MakeEstimationLog(log));
+    s.description = "the --validate logs, whole";
+    return s;
+  }
+  if (FLAGS_holdout_fraction <= 0) {
+    for (const Log& log : logs) s.estimation.push_back(MakeEstimationLog(log));
+    s.description = "none (--holdout_fraction=0 and no --validate)";
+    return s;
+  }
+  s.description = "held out: the contiguous final part of each log (--holdout_fraction=" +
+                  std::to_string(FLAGS_holdout_fraction) + "):";
+  for (const Log& log : logs) {
+    const int cut = log.kind == LogKind::kBalance
+                        ? HoldoutStartRow(log, FLAGS_holdout_fraction)
+                        : HoldoutStart(log.NumRows(), FLAGS_holdout_fraction, log.source);
+    s.estimation.push_back(MakeEstimationLog(log, 0, cut));
+    s.validation.push_back(MakeEstimationLog(log, cut));
+    s.description += " " + log.source + " rows " + std::to_string(cut + 1) + "-" +
+                     std::to_string(log.NumRows());
+  }
+  return s;
+}
+
+// Starting values from the paper's linear baseline on the balance logs.
+std::string StartFromBaseline(const std::vector<Log>& logs, Vehicle* vehicle) {
+  std::vector<BalanceData> balance;
+  for (const Log& log : logs) {
+    if (log.kind == LogKind::kBalance) balance.push_back(MakeBalanceData(log));
+  }
+  if (balance.empty()) {
+    throw InputError("--start=linear_kf needs at least one balance log in --logs");
+  }
+  const LinearBaselineResult r = RunLinearBaseline(vehicle->parameters, balance, {}, {});
+  auto set = [&](const char* name, double value) {
+    const Parameter& p = vehicle->parameters.Get(name);
+    if (p.estimated && std::isfinite(value)) {
+      vehicle->parameters.SetValue(name, std::clamp(value, p.lower, p.upper));
+    }
+  };
+  set("alpha", r.Parameter(kPsiAlpha).value);
+  set("beta", r.Parameter(kThetaBeta).value);
+  set("gamma1", r.Parameter(kThetaGamma1).value);
+  set("gamma2", r.Parameter(kThetaGamma2).value);
+  set("sigma0", r.thrust_map.sigma0);
+  return "starting values of alpha, beta, gamma1, gamma2 and sigma0 from the linear_kf baseline "
+         "on the balance logs; the others from the config";
+}
+
+std::string Csv(const EstimationLog& log, const Eigen::MatrixXd& model) {
+  std::ostringstream out;
+  out.precision(10);
+  out << "t";
+  for (const std::string& name : log.channel_names) out << "," << name << "," << name << "_model";
+  out << "\n";
+  for (int k = 0; k < log.NumRows(); ++k) {
+    out << log.inputs.time(k);
+    for (int c = 0; c < log.NumChannels(); ++c) {
+      out << ",";
+      if (std::isfinite(log.values(k, c))) out << log.values(k, c);
+      out << ",";
+      if (std::isfinite(model(k, c))) out << model(k, c);
+    }
+    out << "\n";
+  }
+  return out.str();
+}
+
+Figure MeasuredVersusModel(const std::string& title, const EstimationLog& log,
+                           const Eigen::MatrixXd& model) {
+  Figure f;
+  f.title = title;
+  f.columns = 3;
+  const bool balance = log.kind == LogKind::kBalance;
+  for (int c = 0; c < log.NumChannels(); ++c) {
+    PlotPanel panel;
+    panel.title = log.channel_names[c];
+    panel.x_label = balance ? "row" : "t [s]";
+    PlotSeries measured{"measured", {}, {}, balance ? "points pt 7 ps 0.3" : "lines lc rgb '#999999'"};
+    PlotSeries predicted{"model", {}, {}, balance ? "points pt 6 ps 0.4 lc rgb 'red'" : "lines lc rgb 'red'"};
+    for (int k = 0; k < log.NumRows(); ++k) {
+      const double x = balance ? k : log.inputs.time(k);
+      measured.x.push_back(x);
+      measured.y.push_back(log.values(k, c));
+      predicted.x.push_back(x);
+      predicted.y.push_back(model(k, c));
+    }
+    panel.series = {measured, predicted};
+    f.panels.push_back(panel);
+  }
+  return f;
+}
+
+nlohmann::json ParametersJson(const ParameterSet& estimates, const IdentifiabilityReport& id) {
+  nlohmann::json out = nlohmann::json::object();
+  for (int i = 0; i < estimates.size(); ++i) {
+    const Parameter& p = estimates[i];
+    nlohmann::json entry = {{"value", p.value}, {"estimated", p.estimated}};
+    if (!p.unit.empty()) entry["unit"] = p.unit;
+    if (p.estimated) {
+      int k = 0;
+      while (id.names[k] != p.name) ++k;
+      if (id.identifiable[k]) {
+        entry["std"] = id.std[k];
+      } else {
+        entry["std"] = nullptr;
+        entry["identifiable"] = false;
+      }
+    } else {
+      entry["std"] = 0.0;
+    }
+    out[p.name] = entry;
+  }
+  return out;
+}
+
+}  // namespace
+
+int RunIdentifyOutputError() {
+  const auto start = Clock::now();
+  Require(FLAGS_logs, "logs");
+  Require(FLAGS_config, "config");
+  Require(FLAGS_out, "out");
+  if (FLAGS_start != "config" && FLAGS_start != "linear_kf") {
+    throw InputError("--start must be config or linear_kf, got '" + FLAGS_start + "'");
+  }
+  std::error_code ec;
+  if (fs::exists(FLAGS_out, ec) && !fs::is_directory(FLAGS_out, ec)) {
+    throw InputError("--out=" + FLAGS_out + " exists and is not a folder");
+  }
+  Vehicle vehicle = LoadVehicle(FLAGS_config);
+  std::vector<Log> logs, validate;
+  for (const std::string& path : SplitList(FLAGS_logs)) logs.push_back(ReadLog(path));
+  for (const std::string& path : SplitList(FLAGS_validate)) validate.push_back(ReadLog(path));
+  if (logs.empty()) throw InputError("--logs names no file");
+  const Split split = SplitLogs(logs, validate);
+
+  OutputErrorOptions options;
+  options.segment_schedule_s = {std::min(0.25, FLAGS_segment_s), FLAGS_segment_s};
+  if (FLAGS_segment_s <= 0.25) options.segment_schedule_s = {FLAGS_segment_s};
+  options.noise_relaxations = FLAGS_noise_relaxations;
+  options.huber_threshold = FLAGS_huber;
+  options.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("output_error options: " + why);
+
+  std::vector<std::string> notes = {"Validation data: " + split.description + "."};
+  if (FLAGS_start == "linear_kf") notes.push_back(StartFromBaseline(logs, &vehicle));
+  bool any_balance = false, any_flight = false;
+  for (const Log& log : logs) (log.kind == LogKind::kBalance ? any_balance : any_flight) = true;
+
+  std::fprintf(stderr, "identify: output_error on %zu log(s), %zu free parameter(s)\n",
+               split.estimation.size(), vehicle.parameters.FreeIndices().size());
+  const OutputErrorResult result = FitOutputError(vehicle, split.estimation, options);
+  if (!result.usable) throw ComputationError(result.why_not_usable);
+  std::fprintf(stderr, "identify: validating on held-out data ...\n");
+  const std::vector<Eigen::MatrixXd> validation_predictions =
+      split.validation.empty()
+          ? std::vector<Eigen::MatrixXd>{}
+          : PredictWithFixedParameters(Vehicle{vehicle.config, result.parameters, vehicle.model},
+                                       split.validation, result.noise, FLAGS_segment_s, options);
+
+  if (any_flight && !any_balance && !result.identifiability.null_directions.empty()) {
+    notes.push_back(
+        "Flight logs alone: see identifiability.not_identifiable; add a balance log of the same "
+        "vehicle to fix the scale of d and the inertias (model.md, decision 8).");
+  }
+
+  // Everything is known: only now write.
+  const std::string dir = FLAGS_out;
+  fs::create_directories(dir + "/plots", ec);
+  if (ec || !fs::is_directory(dir + "/plots")) {
+    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
+  }
+  nlohmann::json files = nlohmann::json::array(), plots = nlohmann::json::array();
+  std::string plot_error;
+  std::set<std::string> used;
+  auto unique = [&](std::string name) {
+    std::string candidate = name;
+    for (int n = 2; used.count(candidate); ++n) candidate = name + "_" + std::to_string(n);
+    used.insert(candidate);
+    return candidate;
+  };
+  Vehicle estimated = vehicle;
+  estimated.parameters = result.parameters;
+  WriteFileAtomically(dir + "/config.yaml", estimated.ResolvedConfig());
+  files.push_back("config.yaml");
+  auto emit = [&](const char* part, const std::vector<EstimationLog>& set,
+                  const std::vector<Eigen::MatrixXd>& model) {
+    for (size_t i = 0; i < set.size(); ++i) {
+      const std::string name = unique(std::string(part) + "_" + set[i].name);
+      WriteFileAtomically(dir + "/" + name + ".csv", Csv(set[i], model[i]));
+      files.push_back(name + ".csv");
+      std::string error;
+      if (RenderFigure(MeasuredVersusModel(std::string(part) + ": " + set[i].source, set[i],
+                                           model[i]),
+                       dir + "/plots/" + name + ".png", &error)) {
+        plots.push_back("plots/" + name + ".png");
+      } else if (plot_error.empty()) {
+        plot_error = error;
+      }
+    }
+  };
+  emit("fit", split.estimation, result.predictions);
+  emit("validation", split.validation, validation_predictions);
+
+  nlohmann::json logs_json = nlohmann::json::array();
+  for (const Log& log : logs) logs_json.push_back(log.source);
+  nlohmann::json noise = nlohmann::json::object();
+  for (const auto& [name, s] : result.noise.std) noise[name] = s;
+  nlohmann::json report = {
+      {"method", "output_error"},
+      {"logs", logs_json},
+      {"parameters", ParametersJson(result.parameters, result.identifiability)},
+      {"fit", FitJson(ChannelFitErrors(split.estimation, result.predictions))},
+      {"validation", split.validation.empty()
+                         ? nlohmann::json{{"description", split.description},
+                                          {"overall_nrmse", nullptr}}
+                         : FitJson(ChannelFitErrors(split.validation, validation_predictions))},
+      {"prediction_window_s", FLAGS_segment_s},
+      {"identifiability", result.identifiability.ToJson()},
+      {"noise_std", noise},
+      {"convergence",
+       {{"iterations", result.iterations},
+        {"initial_cost", result.initial_cost},
+        {"final_cost", result.final_cost},
+        {"termination", result.termination},
+        {"seconds", result.seconds},
+        {"timing", result.timing}}},
+      {"notes", notes},
+      {"outputs", {{"files", files}, {"plots", plots}}}};
+  if (!plot_error.empty()) report["outputs"]["plots_skipped"] = plot_error;
+  report["validation"]["description"] = split.description;
+  WriteJson(dir + "/report.json", report);
+
+  std::printf("output_error estimates (Cramér-Rao std):\n");
+  for (int k = 0; k < static_cast<int>(result.identifiability.names.size()); ++k) {
+    const std::string& name = result.identifiability.names[k];
+    const double value = result.parameters.Value(name);
+    if (result.identifiability.identifiable[k]) {
+      std::printf("  %-22s % .6e +- %.2e\n", name.c_str(), value, result.identifiability.std[k]);
+    } else {
+      std::printf("  %-22s % .6e   not identifiable from these logs\n", name.c_str(), value);
+    }
+  }
+  for (const NullDirection& n : result.identifiability.null_directions) {
+    std::printf("  note: %s\n", n.explanation.c_str());
+  }
+  std::fprintf(stderr, "identify: done in %.1f s -> %s/report.json\n", Since(start), dir.c_str());
+  return 0;
+}
+
+}  // namespace coaxid
