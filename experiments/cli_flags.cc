@@ -20,3 +20,26 @@ DEFINE_double(holdout_fraction, 0.2,
 DEFINE_double(process_noise, 0.0,
               "identify --method=linear_kf: Kalman process noise, Q = q diag(scale^2) per "
               "sample (the paper: 0)");
+
+// identify --method=ekf (experiments/identify_ekf.h).
+DEFINE_bool(smoother, true,
+            "identify --method=ekf: Rauch-Tung-Striebel smoother over the logs (smoothed states "
+            "in states.csv and as the fit windows' start states)");
+DEFINE_bool(ekf_covariance_pass, true,
+            "identify --method=ekf: a second filter pass linearised at the estimates gives the "
+            "reported std (the single pass is over-confident on weakly observable directions)");
+DEFINE_string(ekf_scale_anchor, "d",
+              "identify --method=ekf: d (hold d at its config value when d, gamma1, gamma2, "
+              "Ixx, Iyy, Izz are all free: flight logs fix only their ratios) or none (augment "
+              "all, report the undetermined direction)");
+DEFINE_string(ekf_transition, "linearised",
+              "identify --method=ekf: state-transition matrix from the midpoint Jacobian "
+              "(linearised) or from the variational equations (sensitivities, ~8x slower)");
+DEFINE_string(ekf_initial_report, "",
+              "identify --method=ekf: start the free parameters from this report.json's values "
+              "and std (e.g. output_error's on other data) instead of the config");
+DEFINE_double(ekf_process_noise, 1.0,
+              "identify --method=ekf: multiplier of the default process-noise PSDs (raise it "
+              "when the NIS in the report is above its band: model error)");
+DEFINE_double(ekf_window_s, 1.0,
+              "identify --method=ekf: prediction window of the fit and validation errors [s]");

@@ -14,3 +14,11 @@ DECLARE_string(method);
 DECLARE_string(validate);
 DECLARE_double(holdout_fraction);
 DECLARE_double(process_noise);
+// identify --method=ekf (experiments/identify_ekf.h).
+DECLARE_bool(smoother);
+DECLARE_bool(ekf_covariance_pass);
+DECLARE_string(ekf_scale_anchor);
+DECLARE_string(ekf_transition);
+DECLARE_string(ekf_initial_report);
+DECLARE_double(ekf_process_noise);
+DECLARE_double(ekf_window_s);

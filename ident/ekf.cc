@@ -573,7 +573,9 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   result.free_names = free.names();
   result.free_indices = free.indices();
   result.scales = free.scales();
-  result.covariance_pass = options.covariance_pass;
+  // Nothing to linearise differently without free parameters.
+  const bool covariance_pass = options.covariance_pass && np > 0;
+  result.covariance_pass = covariance_pass;
 
   // The parameter set of the passes: the anchor's `estimated` flag applied.
   Vehicle anchored = vehicle;
@@ -601,7 +603,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   problem.prior = prior_std.cwiseAbs2().asDiagonal();
   result.prior_covariance = problem.prior;
   for (int i = 0; i < kNumStates; ++i) problem.qx[i] = options.state_psd[i];
-  const int passes = options.covariance_pass ? 2 : 1;
+  const int passes = covariance_pass ? 2 : 1;
   problem.total_rows = rows_per_pass * passes;
 
   // Histories.
@@ -624,7 +626,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
     }
     h.parameters.setConstant(N, np, kNaN);
     h.parameter_std.setConstant(N, np, kNaN);
-    if (options.covariance_pass) h.parameter_std_at_estimate.setConstant(N, np, kNaN);
+    if (covariance_pass) h.parameter_std_at_estimate.setConstant(N, np, kNaN);
     h.innovations.setConstant(N, m, kNaN);
     h.innovation_std.setConstant(N, m, kNaN);
     h.nis.assign(N, kNaN);
@@ -657,9 +659,9 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   PassRecord record1;
   record1.parameters = true;
   record1.innovations = true;
-  record1.states = !options.covariance_pass;
+  record1.states = !covariance_pass;
   const Clock::time_point c1 = Clock::now();
-  const PassResult pass1 = RunPass(problem, p0, false, options.smoother && !options.covariance_pass,
+  const PassResult pass1 = RunPass(problem, p0, false, options.smoother && !covariance_pass,
                                    record1, &result.logs, &rows_done);
   result.estimation_pass_s = Seconds(c1, Clock::now());
   if (!pass1.ok) return failed(pass1);
@@ -672,7 +674,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   Eigen::MatrixXd covariance = pass1.P.bottomRightCorner(np, np);
 
   // Pass 2: covariance at the estimate (and the reported states).
-  if (options.covariance_pass) {
+  if (covariance_pass) {
     PassRecord record2;
     record2.states = true;
     record2.std_at_estimate = true;
@@ -696,7 +698,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   result.estimates_from =
       std::string("the filter's estimate at the end of the last log") +
       (options.smoother ? " (equal to the smoothed value there)" : "") +
-      (options.covariance_pass
+      (covariance_pass
            ? "; std from a second pass linearised at that estimate (covariance pass)"
            : "; std from the filter");
   result.clamped = pass1.clamped;

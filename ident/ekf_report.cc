@@ -1,0 +1,483 @@
+#include "ident/ekf_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "core/report.h"
+#include "dynamics/outputs.h"
+#include "dynamics/simulator.h"
+
+namespace coaxid {
+namespace {
+
+using nlohmann::json;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// NaN and infinity have no JSON form: null.
+json Number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+std::string Csv(double v) {
+  if (!std::isfinite(v)) return "";
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.10g", v);
+  return buffer;
+}
+
+std::string CsvName(const std::string& name) {
+  // Log names may hold commas in principle; keep the CSV well formed.
+  std::string out = name;
+  std::replace(out.begin(), out.end(), ',', '_');
+  return out;
+}
+
+// Every k-th index so that at most max_points remain.
+int Stride(size_t n, size_t max_points = 3000) {
+  return static_cast<int>(std::max<size_t>(1, (n + max_points - 1) / max_points));
+}
+
+}  // namespace
+
+Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& log,
+                                  const Eigen::MatrixXd& start_states, double window_s,
+                                  const IntegratorOptions& integrator, int* failed_windows) {
+  const int N = log.NumRows();
+  const Eigen::VectorXd theta = vehicle.parameters.Values();
+  Simulator simulator(vehicle.model, theta, integrator);
+  Eigen::MatrixXd out = Eigen::MatrixXd::Constant(N, log.NumChannels(), kNaN);
+  Trajectory trajectory;
+  double y[kNumFlightChannels];
+  int a = 0;
+  while (a < N) {
+    int b = a + 1;
+    while (b < N && log.inputs.time(b) < log.inputs.time(a) + window_s - 1e-9) ++b;
+    // Window rows [a, b), from the state at row a.
+    const Eigen::VectorXd x0 = start_states.row(a).transpose();
+    bool ok = x0.allFinite();
+    if (ok && b - 1 > a) {
+      ok = simulator.Run(log.inputs, a, b - 1, x0, &trajectory);
+    } else if (ok) {
+      trajectory.states.assign(1, x0);
+    }
+    if (!ok) {
+      if (failed_windows) ++*failed_windows;
+      a = b;
+      continue;
+    }
+    for (int k = a; k < b; ++k) {
+      const Eigen::VectorXd& x = trajectory.states[k - a];
+      FlightOutputs(vehicle.model, theta.data(), x.data(), log.inputs.input(k).data(), y);
+      for (int c = 0; c < log.NumChannels(); ++c) out(k, c) = y[log.channels[c]];
+    }
+    a = b;
+  }
+  return out;
+}
+
+std::map<std::string, FitError> ChannelFitErrors(const std::vector<EstimationLog>& logs,
+                                                 const std::vector<Eigen::MatrixXd>& predictions) {
+  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> pooled;
+  for (size_t i = 0; i < logs.size(); ++i) {
+    for (int c = 0; c < logs[i].NumChannels(); ++c) {
+      auto& [measured, model] = pooled[logs[i].channel_names[c]];
+      for (int k = 0; k < logs[i].NumRows(); ++k) {
+        measured.push_back(logs[i].values(k, c));
+        model.push_back(predictions[i](k, c));
+      }
+    }
+  }
+  std::map<std::string, FitError> out;
+  for (const auto& [name, series] : pooled) {
+    const FitError e = ComputeFitError(series.first, series.second);
+    if (e.count > 0) out[name] = e;
+  }
+  return out;
+}
+
+json EkfReportJson(const EkfResult& r, const EkfOptions& options, const ParameterSet& initial,
+                   const EkfReportContext& context) {
+  json report;
+  report["method"] = "ekf";
+  report["logs"] = context.logs;
+  if (!context.validation_logs.empty()) report["validation_logs"] = context.validation_logs;
+
+  // Parameters: every parameter of the set.
+  json parameters = json::object();
+  auto free_position = [&](const std::string& name) {
+    for (size_t k = 0; k < r.free_names.size(); ++k) {
+      if (r.free_names[k] == name) return static_cast<int>(k);
+    }
+    return -1;
+  };
+  for (int i = 0; i < r.parameters.size(); ++i) {
+    const Parameter& p = r.parameters[i];
+    json entry;
+    entry["value"] = Number(p.value);
+    const int k = free_position(p.name);
+    if (k >= 0) {
+      const bool identifiable = r.identifiable[k];
+      entry["std"] = identifiable ? Number(r.estimate_std[k]) : json(nullptr);
+      entry["estimated"] = true;
+      entry["identifiable"] = identifiable;
+      entry["filter_std"] = Number(r.filter_std[k]);
+      entry["initial"] = Number(initial[i].value);
+      entry["initial_std"] = Number(std::sqrt(r.prior_covariance(k, k)) * r.scales[k]);
+      entry["settled_after_s"] = Number(r.settled_after_s[k]);
+      if (!identifiable) {
+        entry["note"] = "not separately identifiable from these logs (an undetermined "
+                        "direction of the final covariance loads on it; see "
+                        "ekf.undetermined_directions and the scale-free ratios)";
+      }
+    } else {
+      entry["std"] = nullptr;
+      entry["estimated"] = false;
+      std::string source = "config";
+      if (i < kAlpha) source = "config: known constant";
+      if (p.name == r.anchored) {
+        source = "config: held fixed to fix the scale (flight logs determine only ratios; "
+                 "model.md decision 8)";
+      } else if (i >= kAlpha) {
+        source = "config: estimated: false";
+      }
+      entry["source"] = source;
+    }
+    if (!p.unit.empty()) entry["unit"] = p.unit;
+    parameters[p.name] = entry;
+  }
+  report["parameters"] = parameters;
+  json ratios = json::object();
+  for (const ScaleRatio& q : r.ratios) {
+    ratios[q.name] = {{"value", Number(q.value)}, {"std", Number(q.std)}};
+  }
+  if (!r.ratios.empty()) report["scale_free_ratios"] = ratios;
+
+  const std::string fit_definition =
+      "model = open-loop prediction over consecutive windows of window_s, each started from "
+      "the state estimated at its first row with the final parameters (" + context.fit_states +
+      "); accelerometer with each row's inputs";
+  report["fit"] = FitJson(context.fit);
+  report["fit"]["overall_nrmse"] = Number(report["fit"]["overall_nrmse"].get<double>());
+  report["fit"]["definition"] = fit_definition;
+  report["fit"]["window_s"] = context.window_s;
+  if (context.failed_fit_windows > 0) report["fit"]["failed_windows"] = context.failed_fit_windows;
+  report["validation"] = FitJson(context.validation);
+  report["validation"]["overall_nrmse"] =
+      Number(report["validation"]["overall_nrmse"].get<double>());
+  report["validation"]["data"] = context.validation_description;
+  report["validation"]["definition"] =
+      "as fit, with window states from the same filter run on the validation data with every "
+      "parameter held at the estimates";
+  report["validation"]["window_s"] = context.window_s;
+  if (context.failed_validation_windows > 0) {
+    report["validation"]["failed_windows"] = context.failed_validation_windows;
+  }
+
+  // The filter.
+  json ekf;
+  ekf["estimates_from"] = r.estimates_from;
+  ekf["passes"] = r.covariance_pass ? 2 : 1;
+  ekf["transition"] = EkfTransitionMethodName(options.transition);
+  ekf["smoother"] = options.smoother;
+  ekf["augmented"] = r.free_names;
+  ekf["parameter_coordinates"] = "value / scale (the config's scale)";
+  json psd = json::object();
+  for (int i = 0; i < kNumStates; ++i) psd[StateName(i)] = options.state_psd[i];
+  ekf["process_noise"] = {
+      {"state_psd", psd},
+      {"state_psd_units", "(state unit)^2 / s"},
+      {"parameter_psd_scaled", options.parameter_psd},
+      {"parameter_psd_by_name", options.parameter_psd_by_name}};
+  ekf["initial_parameter_std_scaled"] = options.initial_parameter_std;
+  json noise = json::object();
+  for (const auto& [name, s] : context.noise.std) noise[name] = Number(s);
+  ekf["measurement_noise"] = {{"std", noise}, {"source", context.noise_source}};
+  ekf["integrator"] = {{"relative_tolerance", options.integrator.relative_tolerance},
+                       {"absolute_tolerance", options.integrator.absolute_tolerance}};
+
+  json nis_channels = json::object();
+  bool all_consistent = r.total_nis.consistent();
+  for (const NisStatistic& s : r.channel_nis) {
+    nis_channels[s.channel] = {{"mean", Number(s.mean)},
+                               {"band_95", {Number(s.lower), Number(s.upper)}},
+                               {"consistent", s.consistent()},
+                               {"samples", s.dof},
+                               {"innovation_rms", Number(s.innovation_rms)}};
+  }
+  ekf["nis"] = {
+      {"definition", "normalised innovation squared per degree of freedom of the estimation "
+                     "pass (nu_i^2 / S_ii per channel; nu^T S^-1 nu / m for all), mean over "
+                     "the updates after the burn-in; band_95: the two-sided 95 % band of that "
+                     "mean for a consistent filter (chi-square); expected 1"},
+      {"burn_in_s", options.nis_burn_in_s},
+      {"channels", nis_channels},
+      {"all", {{"mean", Number(r.total_nis.mean)},
+               {"band_95", {Number(r.total_nis.lower), Number(r.total_nis.upper)}},
+               {"consistent", r.total_nis.consistent()},
+               {"degrees_of_freedom", r.total_nis.dof}}},
+      {"consistent", all_consistent}};
+  ekf["log_likelihood"] = Number(r.log_likelihood);
+
+  json scale;
+  scale["invariance_found"] = r.scale.exists;
+  std::vector<std::string> group;
+  for (int i : r.scale.group) group.push_back(r.parameters[i].name);
+  scale["group"] = group;
+  scale["residual"] = Number(r.scale.residual);
+  scale["anchored"] = r.anchored.empty() ? json(nullptr) : json(r.anchored);
+  scale["anchor_option"] = options.scale_anchor == EkfOptions::ScaleAnchor::kHubDistance
+                               ? "d (hold d at its config value when the whole group is free)"
+                               : "none (augment all; report the undetermined direction)";
+  ekf["scale"] = scale;
+  json undetermined = json::array();
+  for (const UndeterminedDirection& d : r.undetermined) {
+    json components = json::object();
+    for (size_t k = 0; k < r.free_names.size(); ++k) {
+      components[r.free_names[k]] = Number(d.direction[k]);
+    }
+    undetermined.push_back({{"variance_ratio", Number(d.variance_ratio)},
+                            {"cos_to_scale_direction", Number(d.cos_to_scale)},
+                            {"components_scaled", components}});
+  }
+  ekf["undetermined_directions"] = undetermined;
+  ekf["undetermined_threshold"] = options.undetermined_variance_ratio;
+  ekf["clamped_to_bounds"] = r.clamped;
+  ekf["effort"] = {
+      {"rows_per_pass", r.rows},
+      {"updates", r.updates},
+      {"seconds", {{"total", r.total_s},
+                   {"estimation_pass", r.estimation_pass_s},
+                   {"covariance_pass", r.covariance_pass_s},
+                   {"propagation", r.propagation_s},
+                   {"update", r.update_s},
+                   {"smoother", r.smoother_s}}},
+      {"cvode_steps", r.integrator.steps},
+      {"rhs_evaluations", r.integrator.rhs_evals},
+      {"model_jacobians", r.propagation.jacobians}};
+  report["ekf"] = ekf;
+  report["outputs"] = context.outputs;
+  std::vector<std::string> notes = r.notes;
+  notes.insert(notes.end(), context.notes.begin(), context.notes.end());
+  report["notes"] = notes;
+  return report;
+}
+
+std::string EkfStatesCsv(const EkfResult& r) {
+  const bool smoothed = !r.logs.empty() && r.logs[0].smoothed_states.size() > 0;
+  std::string out = "log,t";
+  for (int i = 0; i < kNumStates; ++i) {
+    out += std::string(",") + StateName(i) + "," + StateName(i) + "_std";
+  }
+  if (smoothed) {
+    for (int i = 0; i < kNumStates; ++i) {
+      out += std::string(",") + StateName(i) + "_smoothed," + StateName(i) + "_smoothed_std";
+    }
+  }
+  out += "\n";
+  for (const EkfLogHistory& h : r.logs) {
+    const std::string name = CsvName(h.name);
+    for (size_t k = 0; k < h.times.size(); ++k) {
+      out += name + "," + Csv(h.times[k]);
+      for (int i = 0; i < kNumStates; ++i) {
+        out += "," + Csv(h.states(k, i)) + "," + Csv(h.state_std(k, i));
+      }
+      if (smoothed) {
+        for (int i = 0; i < kNumStates; ++i) {
+          out += "," + Csv(h.smoothed_states(k, i)) + "," + Csv(h.smoothed_state_std(k, i));
+        }
+      }
+      out += "\n";
+    }
+  }
+  return out;
+}
+
+std::string EkfParametersCsv(const EkfResult& r) {
+  const bool at_estimate = r.covariance_pass;
+  std::string out = "log,t";
+  for (const std::string& p : r.free_names) {
+    out += "," + p + "," + p + "_std";
+    if (at_estimate) out += "," + p + "_std_at_estimate";
+  }
+  out += "\n";
+  for (const EkfLogHistory& h : r.logs) {
+    const std::string name = CsvName(h.name);
+    for (size_t k = 0; k < h.times.size(); ++k) {
+      out += name + "," + Csv(h.times[k]);
+      for (size_t j = 0; j < r.free_names.size(); ++j) {
+        out += "," + Csv(h.parameters(k, j)) + "," + Csv(h.parameter_std(k, j));
+        if (at_estimate) out += "," + Csv(h.parameter_std_at_estimate(k, j));
+      }
+      out += "\n";
+    }
+  }
+  return out;
+}
+
+std::string EkfInnovationsCsv(const EkfResult& r) {
+  // Channels of every log, in first-seen order.
+  std::vector<std::string> channels;
+  for (const EkfLogHistory& h : r.logs) {
+    for (const std::string& c : h.channel_names) {
+      if (std::find(channels.begin(), channels.end(), c) == channels.end()) channels.push_back(c);
+    }
+  }
+  std::string out = "log,t";
+  for (const std::string& c : channels) out += "," + c + "," + c + "_std";
+  out += ",nis,nis_dof\n";
+  for (const EkfLogHistory& h : r.logs) {
+    std::vector<int> column(channels.size(), -1);
+    for (size_t j = 0; j < channels.size(); ++j) {
+      for (size_t c = 0; c < h.channel_names.size(); ++c) {
+        if (h.channel_names[c] == channels[j]) column[j] = static_cast<int>(c);
+      }
+    }
+    const std::string name = CsvName(h.name);
+    for (size_t k = 0; k < h.times.size(); ++k) {
+      out += name + "," + Csv(h.times[k]);
+      for (size_t j = 0; j < channels.size(); ++j) {
+        if (column[j] < 0) {
+          out += ",,";
+        } else {
+          out += "," + Csv(h.innovations(k, column[j])) + "," + Csv(h.innovation_std(k, column[j]));
+        }
+      }
+      out += "," + Csv(h.nis[k]) + "," + std::to_string(h.nis_dof[k]) + "\n";
+    }
+  }
+  return out;
+}
+
+std::vector<EkfFigure> EkfFigures(const EkfResult& r,
+                                  const std::vector<Eigen::MatrixXd>& fit_predictions) {
+  std::vector<EkfFigure> figures;
+  // Parameters along the chained logs.
+  if (!r.free_names.empty()) {
+    Figure f;
+    f.title = "EKF parameter estimates with their 3-sigma band (estimation pass); dotted: final "
+              "estimate +- 3 reported std";
+    f.columns = 3;
+    for (size_t j = 0; j < r.free_names.size(); ++j) {
+      PlotPanel panel;
+      panel.title = r.free_names[j];
+      panel.x_label = "t [s] (logs chained)";
+      PlotSeries estimate{"estimate", {}, {}, "lines lw 2"};
+      PlotSeries upper{"+-3 sigma", {}, {}, "lines dt 2 lc rgb 'gray40'"};
+      PlotSeries lower{"", {}, {}, "lines dt 2 lc rgb 'gray40'"};
+      double offset = 0;
+      for (const EkfLogHistory& h : r.logs) {
+        const int stride = Stride(h.times.size() * r.logs.size());
+        for (size_t k = 0; k < h.times.size(); k += stride) {
+          const double t = offset + h.times[k] - h.times[0];
+          const double v = h.parameters(k, j), s = h.parameter_std(k, j);
+          estimate.x.push_back(t);
+          estimate.y.push_back(v);
+          upper.x.push_back(t);
+          upper.y.push_back(v + 3 * s);
+          lower.x.push_back(t);
+          lower.y.push_back(v - 3 * s);
+        }
+        offset += h.times.back() - h.times.front();
+      }
+      panel.series = {estimate, upper, lower};
+      const double final_std = r.identifiable[j] ? r.estimate_std[j] : kNaN;
+      if (std::isfinite(final_std)) {
+        for (double sign : {-1.0, 1.0}) {
+          panel.series.push_back({sign > 0 ? "final +-3 std" : "",
+                                  {0.0, offset},
+                                  {r.estimate[j] + sign * 3 * final_std,
+                                   r.estimate[j] + sign * 3 * final_std},
+                                  "lines dt 3 lc rgb 'red'"});
+        }
+        // Keep the axis on the converged part: the prior band is wide.
+        panel.y_min = r.estimate[j] - 12 * final_std;
+        panel.y_max = r.estimate[j] + 12 * final_std;
+      }
+      f.panels.push_back(panel);
+    }
+    figures.push_back({"parameters.png", f});
+  }
+  for (size_t L = 0; L < r.logs.size(); ++L) {
+    const EkfLogHistory& h = r.logs[L];
+    const int stride = Stride(h.times.size());
+    // Innovations.
+    Figure innovations;
+    innovations.title = "EKF innovations (estimation pass), " + h.source + ": points; +-3 sqrt(S_ii)";
+    innovations.columns = 3;
+    for (size_t c = 0; c < h.channel_names.size(); ++c) {
+      PlotPanel panel;
+      panel.title = h.channel_names[c];
+      panel.x_label = "t [s]";
+      PlotSeries nu{"", {}, {}, "points pt 7 ps 0.3"};
+      PlotSeries up{"", {}, {}, "lines lc rgb 'red'"}, down{"", {}, {}, "lines lc rgb 'red'"};
+      for (size_t k = 0; k < h.times.size(); k += stride) {
+        nu.x.push_back(h.times[k]);
+        nu.y.push_back(h.innovations(k, c));
+        up.x.push_back(h.times[k]);
+        up.y.push_back(3 * h.innovation_std(k, c));
+        down.x.push_back(h.times[k]);
+        down.y.push_back(-3 * h.innovation_std(k, c));
+      }
+      panel.series = {nu, up, down};
+      innovations.panels.push_back(panel);
+    }
+    figures.push_back({"innovations_" + h.name + ".png", innovations});
+
+    // States: measured and estimated.
+    const bool smoothed = h.smoothed_states.size() > 0;
+    const Eigen::MatrixXd& estimate = smoothed ? h.smoothed_states : h.states;
+    Figure states;
+    states.title = std::string("EKF states, ") + h.source + ": measured (points), " +
+                   (smoothed ? "smoothed" : "filtered") + " (line)";
+    states.columns = 3;
+    for (int i = 0; i < kNumStates; ++i) {
+      PlotPanel panel;
+      panel.title = StateName(i);
+      panel.x_label = "t [s]";
+      PlotSeries measured{"", {}, {}, "points pt 7 ps 0.3 lc rgb 'gray50'"};
+      PlotSeries line{"", {}, {}, "lines lw 2"};
+      int col = -1;
+      for (size_t c = 0; c < h.channels.size(); ++c) {
+        if (h.channels[c] == i) col = static_cast<int>(c);
+      }
+      for (size_t k = 0; k < h.times.size(); k += stride) {
+        if (col >= 0) {
+          measured.x.push_back(h.times[k]);
+          measured.y.push_back(h.measured(k, col));
+        }
+        line.x.push_back(h.times[k]);
+        line.y.push_back(estimate(k, i));
+      }
+      if (col >= 0) panel.series.push_back(measured);
+      panel.series.push_back(line);
+      states.panels.push_back(panel);
+    }
+    figures.push_back({"states_" + h.name + ".png", states});
+
+    // Fit windows.
+    if (L < fit_predictions.size()) {
+      Figure fit;
+      fit.title = "Fit, " + h.source + ": measured (points) and window predictions (line)";
+      fit.columns = 3;
+      for (size_t c = 0; c < h.channel_names.size(); ++c) {
+        PlotPanel panel;
+        panel.title = h.channel_names[c];
+        panel.x_label = "t [s]";
+        PlotSeries measured{"", {}, {}, "points pt 7 ps 0.3 lc rgb 'gray50'"};
+        PlotSeries model{"", {}, {}, "lines lw 2"};
+        for (size_t k = 0; k < h.times.size(); k += stride) {
+          measured.x.push_back(h.times[k]);
+          measured.y.push_back(h.measured(k, c));
+          model.x.push_back(h.times[k]);
+          model.y.push_back(fit_predictions[L](k, c));
+        }
+        panel.series = {measured, model};
+        fit.panels.push_back(panel);
+      }
+      figures.push_back({"fit_" + h.name + ".png", fit});
+    }
+  }
+  return figures;
+}
+
+}  // namespace coaxid
