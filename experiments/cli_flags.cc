@@ -10,7 +10,7 @@ DEFINE_string(logs, "", "comma-separated log files (CSV, ../shared/spec/log-form
 DEFINE_string(data_dir, COAXID_DEFAULT_DATA_DIR,
               "where the shipped configs/ and data/ are (demo)");
 DEFINE_string(method, "",
-              "identify: the estimator: linear_kf (the paper's; ekf and output_error later)");
+              "identify: the estimator: linear_kf (the paper's), ekf or output_error");
 DEFINE_string(validate, "",
               "identify: comma-separated held-out logs for validation; without it the final "
               "part of each log is held out (--holdout_fraction)");

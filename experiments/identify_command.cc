@@ -18,6 +18,7 @@
 #include "dynamics/vehicle.h"
 #include "experiments/cli.h"
 #include "experiments/cli_flags.h"
+#include "experiments/identify_ekf.h"
 #include "experiments/identify_output_error.h"
 #include "ident/baseline_plots.h"
 #include "ident/baseline_report.h"
@@ -42,10 +43,7 @@ void Require(const std::string& value, const char* flag) {
 }
 
 void CheckMethod(const std::string& method) {
-  if (method == "linear_kf" || method == "output_error") return;
-  if (method == "ekf") {
-    throw InputError("method '" + method + "' is not available yet (linear_kf, output_error)");
-  }
+  if (method == "linear_kf" || method == "output_error" || method == "ekf") return;
   throw InputError("unknown method '" + method +
                    "' (the methods are linear_kf, ekf and output_error)");
 }
@@ -129,6 +127,7 @@ int RunIdentify() {
   Require(FLAGS_method, "method");
   CheckMethod(FLAGS_method);
   if (FLAGS_method == "output_error") return RunIdentifyOutputError();
+  if (FLAGS_method == "ekf") return RunIdentifyEkf();
   Require(FLAGS_logs, "logs");
   Require(FLAGS_config, "config");
   Require(FLAGS_out, "out");

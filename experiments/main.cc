@@ -5,7 +5,7 @@
 #include "experiments/cli.h"
 
 int main(int argc, char** argv) {
-  gflags::SetUsageMessage("coaxid <simulate|check|demo> [--flags]");
+  gflags::SetUsageMessage("coaxid <simulate|check|identify|demo> [--flags]");
   gflags::ParseCommandLineFlags(&argc, &argv, /*remove_flags=*/true);
   FLAGS_logtostderr = true;
   google::InitGoogleLogging(argv[0]);

@@ -75,26 +75,6 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
   return out;
 }
 
-std::map<std::string, FitError> ChannelFitErrors(const std::vector<EstimationLog>& logs,
-                                                 const std::vector<Eigen::MatrixXd>& predictions) {
-  std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> pooled;
-  for (size_t i = 0; i < logs.size(); ++i) {
-    for (int c = 0; c < logs[i].NumChannels(); ++c) {
-      auto& [measured, model] = pooled[logs[i].channel_names[c]];
-      for (int k = 0; k < logs[i].NumRows(); ++k) {
-        measured.push_back(logs[i].values(k, c));
-        model.push_back(predictions[i](k, c));
-      }
-    }
-  }
-  std::map<std::string, FitError> out;
-  for (const auto& [name, series] : pooled) {
-    const FitError e = ComputeFitError(series.first, series.second);
-    if (e.count > 0) out[name] = e;
-  }
-  return out;
-}
-
 json EkfReportJson(const EkfResult& r, const EkfOptions& options, const ParameterSet& initial,
                    const EkfReportContext& context) {
   json report;

@@ -38,10 +38,7 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
                                   const Eigen::MatrixXd& start_states, double window_s,
                                   const IntegratorOptions& integrator, int* failed_windows);
 
-// Per-channel fit errors (core/statistics.h) of predictions against the logs,
-// pooled over logs.
-std::map<std::string, FitError> ChannelFitErrors(const std::vector<EstimationLog>& logs,
-                                                 const std::vector<Eigen::MatrixXd>& predictions);
+// Per-channel fit errors of predictions: ChannelFitErrors of ident/output_error.h.
 
 struct EkfReportContext {
   std::vector<std::string> logs;             // estimation logs as given

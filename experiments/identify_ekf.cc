@@ -1,0 +1,360 @@
+#include "experiments/identify_ekf.h"
+
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/errors.h"
+#include "core/plot.h"
+#include "core/report.h"
+#include "dynamics/vehicle.h"
+#include "experiments/cli.h"
+#include "experiments/cli_flags.h"
+#include "ident/ekf.h"
+#include "ident/ekf_report.h"
+#include "ident/estimation_log.h"
+#include "ident/noise_weights.h"
+#include "ident/output_error.h"  // ChannelFitErrors
+
+namespace coaxid {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+constexpr const char* kUsage =
+    "usage: coaxid identify --method=ekf --logs=A.csv[,B.csv] --config=F --out=DIR "
+    "[--validate=C.csv] [--holdout_fraction=0.2] [--smoother=true] "
+    "[--ekf_scale_anchor=d|none] [--ekf_transition=linearised|sensitivities] "
+    "[--ekf_covariance_pass=true] [--ekf_process_noise=1] [--ekf_window_s=1] "
+    "[--ekf_initial_report=R.json]";
+
+void Require(const std::string& value, const char* flag) {
+  if (value.empty()) throw InputError(std::string("missing --") + flag + "\n" + kUsage);
+}
+
+std::vector<Log> ReadFlightLogs(const std::vector<std::string>& paths, const char* flag) {
+  std::vector<Log> logs;
+  for (const std::string& path : paths) {
+    Log log = ReadLog(path);
+    if (log.kind != LogKind::kFlight) {
+      throw InputError(path + ": a " + LogKindName(log.kind) + " log given to --" + flag +
+                       ", but --method=ekf estimates from flight logs (states and parameters "
+                       "together); balance logs are for linear_kf and output_error");
+    }
+    logs.push_back(std::move(log));
+  }
+  return logs;
+}
+
+// File-name-safe, unique names for the data sets.
+void MakeNamesUnique(std::vector<EstimationLog>* logs, std::set<std::string>* taken) {
+  for (EstimationLog& log : *logs) {
+    std::string stem = log.name.empty() ? "log" : log.name;
+    for (char& c : stem) {
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+    }
+    std::string name = stem;
+    for (int k = 2; taken->count(name) > 0; ++k) name = stem + "_" + std::to_string(k);
+    taken->insert(name);
+    log.name = name;
+  }
+}
+
+// Initial values and std from an earlier report.json.
+std::string ApplyInitialReport(const std::string& path, Vehicle* vehicle, EkfOptions* options) {
+  nlohmann::json report;
+  try {
+    report = nlohmann::json::parse(ReadFile(path));
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": not a JSON report (" + e.what() + ")");
+  }
+  if (!report.contains("parameters") || !report["parameters"].is_object()) {
+    throw InputError(path + ": no \"parameters\" object (cli-and-reports.md report.json)");
+  }
+  int used = 0;
+  for (const auto& [name, entry] : report["parameters"].items()) {
+    const int i = vehicle->parameters.Index(name);
+    if (i < 0 || !vehicle->parameters[i].estimated || !entry.is_object()) continue;
+    if (!entry.contains("value") || !entry["value"].is_number()) continue;
+    const double value = entry["value"].get<double>();
+    const Parameter& p = vehicle->parameters[i];
+    if (!(std::isfinite(value) && value >= p.lower && value <= p.upper)) {
+      throw InputError(path + ": parameters." + name + ".value = " + std::to_string(value) +
+                       " is outside the config's bounds [" + std::to_string(p.lower) + ", " +
+                       std::to_string(p.upper) + "]");
+    }
+    vehicle->parameters.SetValue(name, value);
+    if (entry.contains("std") && entry["std"].is_number()) {
+      const double s = entry["std"].get<double>();
+      if (std::isfinite(s) && s > 0) options->initial_parameter_std_by_name[name] = s;
+    }
+    ++used;
+  }
+  if (used == 0) throw InputError(path + ": no value for any free parameter of the config");
+  return "initial values (and std where given) of " + std::to_string(used) +
+         " free parameters from " + path +
+         " (if that report was estimated from these same logs, the data count twice)";
+}
+
+std::string MeasuredVersusModelCsv(const EstimationLog& log, const Eigen::MatrixXd& model) {
+  std::ostringstream out;
+  out.precision(10);
+  out << "t";
+  for (const std::string& name : log.channel_names) out << "," << name << "," << name << "_model";
+  out << "\n";
+  for (int k = 0; k < log.NumRows(); ++k) {
+    out << log.inputs.time(k);
+    for (int c = 0; c < log.NumChannels(); ++c) {
+      out << ",";
+      if (std::isfinite(log.values(k, c))) out << log.values(k, c);
+      out << ",";
+      if (std::isfinite(model(k, c))) out << model(k, c);
+    }
+    out << "\n";
+  }
+  return out.str();
+}
+
+void PrintEstimates(const EkfResult& r) {
+  std::printf("ekf estimates (std from the %s):\n",
+              r.covariance_pass ? "covariance pass at the estimates" : "filter");
+  for (size_t k = 0; k < r.free_names.size(); ++k) {
+    if (r.identifiable[k]) {
+      std::printf("  %-10s % .6e +- %.2e\n", r.free_names[k].c_str(), r.estimate[k],
+                  r.estimate_std[k]);
+    } else {
+      std::printf("  %-10s % .6e  (not separately identifiable)\n", r.free_names[k].c_str(),
+                  r.estimate[k]);
+    }
+  }
+  for (const ScaleRatio& q : r.ratios) {
+    std::printf("  %-10s % .6e +- %.2e  (scale-free)\n", q.name.c_str(), q.value, q.std);
+  }
+  std::printf("  NIS per degree of freedom %.4f (95 %% band %.4f .. %.4f)%s\n", r.total_nis.mean,
+              r.total_nis.lower, r.total_nis.upper,
+              r.total_nis.consistent() ? "" : "  OUTSIDE the band");
+}
+
+}  // namespace
+
+int RunIdentifyEkf() {
+  const Clock::time_point start = Clock::now();
+  Require(FLAGS_logs, "logs");
+  Require(FLAGS_config, "config");
+  Require(FLAGS_out, "out");
+  if (!(FLAGS_holdout_fraction >= 0 && FLAGS_holdout_fraction < 1)) {
+    throw InputError("--holdout_fraction must lie in [0, 1), got " +
+                     std::to_string(FLAGS_holdout_fraction));
+  }
+  if (!(FLAGS_ekf_window_s > 0 && std::isfinite(FLAGS_ekf_window_s))) {
+    throw InputError("--ekf_window_s must be > 0, got " + std::to_string(FLAGS_ekf_window_s));
+  }
+  if (!(FLAGS_ekf_process_noise > 0 && std::isfinite(FLAGS_ekf_process_noise))) {
+    throw InputError("--ekf_process_noise must be > 0, got " +
+                     std::to_string(FLAGS_ekf_process_noise));
+  }
+  EkfOptions options;
+  options.smoother = FLAGS_smoother;
+  options.covariance_pass = FLAGS_ekf_covariance_pass;
+  if (FLAGS_ekf_scale_anchor == "d") {
+    options.scale_anchor = EkfOptions::ScaleAnchor::kHubDistance;
+  } else if (FLAGS_ekf_scale_anchor == "none") {
+    options.scale_anchor = EkfOptions::ScaleAnchor::kNone;
+  } else {
+    throw InputError("--ekf_scale_anchor must be d or none, got '" + FLAGS_ekf_scale_anchor + "'");
+  }
+  if (FLAGS_ekf_transition == "linearised" || FLAGS_ekf_transition == "linearized") {
+    options.transition = EkfTransitionMethod::kLinearised;
+  } else if (FLAGS_ekf_transition == "sensitivities") {
+    options.transition = EkfTransitionMethod::kSensitivities;
+  } else {
+    throw InputError("--ekf_transition must be linearised or sensitivities, got '" +
+                     FLAGS_ekf_transition + "'");
+  }
+  for (double& q : options.state_psd) q *= FLAGS_ekf_process_noise;
+  std::error_code ec;
+  if (fs::exists(FLAGS_out, ec) && !fs::is_directory(FLAGS_out, ec)) {
+    throw InputError("--out=" + FLAGS_out + " exists and is not a folder");
+  }
+  const std::vector<std::string> paths = SplitList(FLAGS_logs);
+  const std::vector<std::string> validate_paths = SplitList(FLAGS_validate);
+  if (paths.empty()) throw InputError("--logs names no file");
+
+  Vehicle vehicle = LoadVehicle(FLAGS_config);
+  EkfReportContext context;
+  if (!FLAGS_ekf_initial_report.empty()) {
+    context.notes.push_back(ApplyInitialReport(FLAGS_ekf_initial_report, &vehicle, &options));
+  }
+  const ParameterSet initial = vehicle.parameters;
+  std::fprintf(stderr, "identify: ekf: reading %zu log(s)%s\n", paths.size(),
+               validate_paths.empty() ? "" : " and the validation logs");
+  const std::vector<Log> logs = ReadFlightLogs(paths, "logs");
+  const std::vector<Log> validate_logs = ReadFlightLogs(validate_paths, "validate");
+
+  // Estimation and validation data.
+  std::vector<EstimationLog> estimation, validation;
+  if (!validate_paths.empty()) {
+    for (const Log& log : logs) estimation.push_back(MakeEstimationLog(log));
+    for (const Log& log : validate_logs) validation.push_back(MakeEstimationLog(log));
+    context.validation_description = "the --validate logs, whole";
+  } else if (FLAGS_holdout_fraction > 0) {
+    context.validation_description =
+        "held out: the contiguous final part of each log (--holdout_fraction=" +
+        std::to_string(FLAGS_holdout_fraction) + "):";
+    for (const Log& log : logs) {
+      const int cut = HoldoutStart(log.NumRows(), FLAGS_holdout_fraction, log.source);
+      estimation.push_back(MakeEstimationLog(log, 0, cut));
+      validation.push_back(MakeEstimationLog(log, cut));
+      context.validation_description += " " + log.source + " rows " + std::to_string(cut + 1) +
+                                        "-" + std::to_string(log.NumRows());
+    }
+  } else {
+    for (const Log& log : logs) estimation.push_back(MakeEstimationLog(log));
+    context.validation_description = "none (--holdout_fraction=0 and no --validate)";
+  }
+  std::set<std::string> taken;
+  MakeNamesUnique(&estimation, &taken);
+  if (!validate_paths.empty()) {
+    MakeNamesUnique(&validation, &taken);
+  } else {
+    for (size_t i = 0; i < validation.size(); ++i) validation[i].name = estimation[i].name;
+  }
+  context.logs = paths;
+  context.validation_logs = validate_paths;
+  context.window_s = FLAGS_ekf_window_s;
+
+  // Measurement noise from the data (ident/noise_weights.h); validation
+  // channels the estimation data lack get theirs from the validation data.
+  context.noise = NoiseFromData(estimation);
+  context.noise_source =
+      "first differences of each channel over the estimation data, std(diff) / sqrt(2) "
+      "(ident/noise_weights.h NoiseFromData): an upper bound where the signal moves fast "
+      "between samples";
+  NoiseWeights validation_noise = context.noise;
+  if (!validation.empty()) {
+    for (const auto& [name, s] : NoiseFromData(validation).std) {
+      validation_noise.std.emplace(name, s);
+    }
+  }
+
+  long last_report = -1;
+  const Clock::time_point filter_start = Clock::now();
+  options.progress = [&](long done, long total) {
+    if (done == last_report) return;
+    last_report = done;
+    std::fprintf(stderr, "identify: ekf: %ld / %ld rows (%.0f %%), %.2f s\n", done, total,
+                 100.0 * done / std::max(1L, total), Since(filter_start));
+  };
+  std::fprintf(stderr, "identify: ekf on %zu log part(s), %zu free parameter(s)%s ...\n",
+               estimation.size(), vehicle.parameters.FreeIndices().size(),
+               options.covariance_pass ? " (estimation and covariance passes)" : "");
+  const EkfResult result = RunEkf(vehicle, estimation, context.noise, options);
+  if (!result.usable) throw ComputationError(result.failure);
+  std::fprintf(stderr, "identify: ekf: done in %.2f s (propagation %.2f s, updates %.2f s, "
+               "smoother %.2f s)\n", result.total_s, result.propagation_s, result.update_s,
+               result.smoother_s);
+
+  // Fit: window predictions from the reported (smoothed) states.
+  Vehicle estimated = vehicle;
+  estimated.parameters = result.parameters;
+  const bool smoothed = options.smoother;
+  context.fit_states = std::string(smoothed ? "smoothed" : "filtered") + " states" +
+                       (result.covariance_pass ? " of the covariance pass" : "");
+  std::vector<Eigen::MatrixXd> fit_predictions;
+  for (size_t i = 0; i < estimation.size(); ++i) {
+    const EkfLogHistory& h = result.logs[i];
+    fit_predictions.push_back(WindowPredictions(estimated, estimation[i],
+                                                smoothed ? h.smoothed_states : h.states,
+                                                FLAGS_ekf_window_s, options.integrator,
+                                                &context.failed_fit_windows));
+  }
+  context.fit = ChannelFitErrors(estimation, fit_predictions);
+
+  // Validation: the filter with every parameter fixed, then the same windows.
+  std::vector<Eigen::MatrixXd> validation_predictions;
+  if (!validation.empty()) {
+    Vehicle fixed = estimated;
+    for (int i = 0; i < fixed.parameters.size(); ++i) {
+      fixed.parameters.mutable_parameter(i).estimated = false;
+    }
+    EkfOptions state_only = options;
+    state_only.progress = nullptr;
+    std::fprintf(stderr, "identify: ekf: state estimation on the validation data ...\n");
+    const EkfResult v = RunEkf(fixed, validation, validation_noise, state_only);
+    if (!v.usable) throw ComputationError("validation: " + v.failure);
+    for (size_t i = 0; i < validation.size(); ++i) {
+      const EkfLogHistory& h = v.logs[i];
+      validation_predictions.push_back(WindowPredictions(
+          estimated, validation[i], smoothed ? h.smoothed_states : h.states, FLAGS_ekf_window_s,
+          options.integrator, &context.failed_validation_windows));
+    }
+    context.validation = ChannelFitErrors(validation, validation_predictions);
+  }
+  if (context.failed_fit_windows + context.failed_validation_windows > 0) {
+    context.notes.push_back(std::to_string(context.failed_fit_windows +
+                                           context.failed_validation_windows) +
+                            " prediction window(s) could not be simulated (left out of fit / "
+                            "validation)");
+  }
+
+  // Everything is known: only now write.
+  const std::string dir = FLAGS_out;
+  fs::create_directories(dir + "/plots", ec);
+  if (ec || !fs::is_directory(dir + "/plots")) {
+    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
+  }
+  nlohmann::json files = nlohmann::json::array();
+  auto write = [&](const std::string& name, const std::string& text) {
+    WriteFileAtomically(dir + "/" + name, text);
+    files.push_back(name);
+  };
+  write("config.yaml", vehicle.ResolvedConfig());
+  write("estimated_config.yaml", estimated.ResolvedConfig());
+  write("states.csv", EkfStatesCsv(result));
+  write("parameters.csv", EkfParametersCsv(result));
+  write("innovations.csv", EkfInnovationsCsv(result));
+  for (size_t i = 0; i < estimation.size(); ++i) {
+    write("fit_" + estimation[i].name + ".csv",
+          MeasuredVersusModelCsv(estimation[i], fit_predictions[i]));
+  }
+  for (size_t i = 0; i < validation.size(); ++i) {
+    write("validation_" + validation[i].name + ".csv",
+          MeasuredVersusModelCsv(validation[i], validation_predictions[i]));
+  }
+  std::fprintf(stderr, "identify: ekf: plotting (gnuplot) ...\n");
+  nlohmann::json plots = nlohmann::json::array();
+  std::string plot_error;
+  for (const EkfFigure& f : EkfFigures(result, fit_predictions)) {
+    std::string why;
+    if (RenderFigure(f.figure, dir + "/plots/" + f.file, &why)) {
+      plots.push_back("plots/" + f.file);
+    } else if (plot_error.empty()) {
+      plot_error = why;
+    }
+  }
+  context.outputs = {{"files", files}, {"plots", plots}};
+  if (!plot_error.empty()) {
+    context.outputs["plots_skipped"] = plot_error;
+    context.notes.push_back("plots skipped: " + plot_error);
+  }
+  context.notes.push_back("Validation data: " + context.validation_description + ".");
+  WriteJson(dir + "/report.json", EkfReportJson(result, options, initial, context));
+  PrintEstimates(result);
+  std::fprintf(stderr, "identify: ekf: done in %.2f s -> %s/report.json%s\n", Since(start),
+               dir.c_str(), plot_error.empty() ? "" : " (plots skipped)");
+  return 0;
+}
+
+}  // namespace coaxid
