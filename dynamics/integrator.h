@@ -50,6 +50,9 @@ struct IntegratorOptions {
   // others (e.g. the sensitivity part of a system augmented with its variational equations,
   // dynamics/variational_system.h) ride along on the steps the first k need.
   int error_controlled_states = 0;
+  // Use coaxid's compiled-with-optimisation vector kernels instead of the system SUNDIALS
+  // library's (dynamics/serial_vector_ops.h). Off only to compare the two.
+  bool optimized_vector_ops = true;
 
   bool IsValid(std::string* why) const;
 };

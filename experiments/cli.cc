@@ -12,7 +12,9 @@
 #include "core/report.h"
 #include "dynamics/vehicle.h"
 #include "experiments/cli_flags.h"
+#include "experiments/discover_command.h"
 #include "experiments/identify_command.h"
+#include "experiments/import_command.h"
 #include "experiments/log_summary.h"
 #include "experiments/scenario.h"
 #include "experiments/simulate_experiment.h"
@@ -30,6 +32,9 @@ constexpr const char* kUsage =
     "           [--validate=C.csv,...] [--holdout_fraction=0.2]\n"
     "           linear_kf: [--process_noise=0]\n"
     "           output_error: [--segment_s=1] [--start=config|linear_kf] [--huber=0]\n"
+    "  discover --logs=A.csv[,B.csv...] --config=F --out=DIR [--validate=C.csv,...]\n"
+    "           [--alpha=0.01] [--max_added=4] [--segment_s=1]\n"
+    "  import   --format=tmotor28 --in=DIR --out=DIR2\n"
     "  demo     --out=DIR\n"
     "Run `coaxid --help` for every flag.\n";
 
@@ -256,6 +261,8 @@ int RunCli(int argc, char** argv) {
     if (command == "check") return Check();
     if (command == "demo") return Demo();
     if (command == "identify") return RunIdentify();
+    if (command == "discover") return RunDiscover();
+    if (command == "import") return RunImport();
     std::cerr << "coaxid: unknown subcommand '" << command << "'\n" << kUsage;
     return 2;
   } catch (const InputError& e) {

@@ -21,6 +21,10 @@ DEFINE_double(process_noise, 0.0,
               "identify --method=linear_kf: Kalman process noise, Q = q diag(scale^2) per "
               "sample (the paper: 0)");
 
+// import (experiments/import_command.h).
+DEFINE_string(format, "", "import: the rig's file format (tmotor28)");
+DEFINE_string(in, "", "import: folder holding the rig's own CSV files");
+
 // identify --method=ekf (experiments/identify_ekf.h).
 DEFINE_bool(smoother, true,
             "identify --method=ekf: Rauch-Tung-Striebel smoother over the logs (smoothed states "
@@ -43,3 +47,7 @@ DEFINE_double(ekf_process_noise, 1.0,
               "when the NIS in the report is above its band: model error)");
 DEFINE_double(ekf_window_s, 1.0,
               "identify --method=ekf: prediction window of the fit and validation errors [s]");
+DEFINE_int32(ekf_noise_adaptations, 1,
+             "identify --method=ekf: re-estimate the measurement noise from the innovations "
+             "and run the estimation again this many times (0: keep the first-difference "
+             "estimate)");

@@ -14,6 +14,9 @@ DECLARE_string(method);
 DECLARE_string(validate);
 DECLARE_double(holdout_fraction);
 DECLARE_double(process_noise);
+// import (experiments/import_command.h).
+DECLARE_string(format);
+DECLARE_string(in);
 // identify --method=ekf (experiments/identify_ekf.h).
 DECLARE_bool(smoother);
 DECLARE_bool(ekf_covariance_pass);
@@ -22,3 +25,4 @@ DECLARE_string(ekf_transition);
 DECLARE_string(ekf_initial_report);
 DECLARE_double(ekf_process_noise);
 DECLARE_double(ekf_window_s);
+DECLARE_int32(ekf_noise_adaptations);

@@ -38,7 +38,7 @@ constexpr const char* kUsage =
     "[--validate=C.csv] [--holdout_fraction=0.2] [--smoother=true] "
     "[--ekf_scale_anchor=d|none] [--ekf_transition=linearised|sensitivities] "
     "[--ekf_covariance_pass=true] [--ekf_process_noise=1] [--ekf_window_s=1] "
-    "[--ekf_initial_report=R.json]";
+    "[--ekf_noise_adaptations=1] [--ekf_initial_report=R.json]";
 
 void Require(const std::string& value, const char* flag) {
   if (value.empty()) throw InputError(std::string("missing --") + flag + "\n" + kUsage);
@@ -184,6 +184,11 @@ int RunIdentifyEkf() {
                      FLAGS_ekf_transition + "'");
   }
   for (double& q : options.state_psd) q *= FLAGS_ekf_process_noise;
+  if (FLAGS_ekf_noise_adaptations < 0 || FLAGS_ekf_noise_adaptations > 5) {
+    throw InputError("--ekf_noise_adaptations must lie in 0 .. 5, got " +
+                     std::to_string(FLAGS_ekf_noise_adaptations));
+  }
+  options.noise_adaptations = FLAGS_ekf_noise_adaptations;
   std::error_code ec;
   if (fs::exists(FLAGS_out, ec) && !fs::is_directory(FLAGS_out, ec)) {
     throw InputError("--out=" + FLAGS_out + " exists and is not a folder");
@@ -257,9 +262,10 @@ int RunIdentifyEkf() {
     std::fprintf(stderr, "identify: ekf: %ld / %ld rows (%.0f %%), %.2f s\n", done, total,
                  100.0 * done / std::max(1L, total), Since(filter_start));
   };
-  std::fprintf(stderr, "identify: ekf on %zu log part(s), %zu free parameter(s)%s ...\n",
+  std::fprintf(stderr, "identify: ekf on %zu log part(s), %zu free parameter(s): %d noise "
+               "adaptation pass(es), estimation pass%s ...\n",
                estimation.size(), vehicle.parameters.FreeIndices().size(),
-               options.covariance_pass ? " (estimation and covariance passes)" : "");
+               options.noise_adaptations, options.covariance_pass ? ", covariance pass" : "");
   const EkfResult result = RunEkf(vehicle, estimation, context.noise, options);
   if (!result.usable) throw ComputationError(result.failure);
   std::fprintf(stderr, "identify: ekf: done in %.2f s (propagation %.2f s, updates %.2f s, "
@@ -291,6 +297,8 @@ int RunIdentifyEkf() {
     }
     EkfOptions state_only = options;
     state_only.progress = nullptr;
+    state_only.noise_adaptations = 0;
+    for (const auto& [name, s] : result.noise.std) validation_noise.std[name] = s;
     std::fprintf(stderr, "identify: ekf: state estimation on the validation data ...\n");
     const EkfResult v = RunEkf(fixed, validation, validation_noise, state_only);
     if (!v.usable) throw ComputationError("validation: " + v.failure);

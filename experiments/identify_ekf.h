@@ -4,10 +4,12 @@
 //       [--validate=C.csv,...] [--holdout_fraction=0.2] [--smoother=true]
 //       [--ekf_scale_anchor=d|none] [--ekf_transition=linearised|sensitivities]
 //       [--ekf_covariance_pass=true] [--ekf_process_noise=1] [--ekf_window_s=1]
-//       [--ekf_initial_report=R.json]
+//       [--ekf_noise_adaptations=1] [--ekf_initial_report=R.json]
 //
-// Flight logs only. Runs the EKF (states and the config's free parameters
-// together) on the estimation data (each log's first part, or whole logs when
+// Flight logs only. Measurement noise from first differences
+// (NoiseFromData), refined from the innovations (--ekf_noise_adaptations).
+// Runs the EKF (states and the config's free parameters together) on the
+// estimation data (each log's first part, or whole logs when
 // --validate is given), then a state-only filter with the parameters held at
 // the estimates on the held-out data, and writes
 //   DIR/report.json        method "ekf", parameters {value, std, estimated},

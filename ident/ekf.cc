@@ -86,7 +86,7 @@ std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs) {
 }
 
 struct ChannelAccumulator {
-  double nis = 0, innovation_squares = 0;
+  double nis = 0, innovation_squares = 0, innovation_variance = 0;  // sums of nu^2/S, nu^2, S
   long count = 0;
 };
 
@@ -141,6 +141,9 @@ bool EkfOptions::IsValid(std::string* why) const {
     return fail("undetermined_variance_ratio must lie in (0, 1)");
   }
   if (progress_every_rows < 1) return fail("progress_every_rows must be >= 1");
+  if (noise_adaptations < 0 || noise_adaptations > 5) {
+    return fail("noise_adaptations must lie in 0 .. 5");
+  }
   return true;
 }
 
@@ -151,7 +154,7 @@ namespace {
 struct Problem {
   const Vehicle& vehicle;
   const std::vector<EstimationLog>& logs;
-  const NoiseWeights& noise;
+  NoiseWeights noise;
   const EkfOptions& options;
   const FreeParameters& free;
   Eigen::VectorXd lower, upper;  // scaled bounds
@@ -425,6 +428,7 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
               ChannelAccumulator& a = out.channel_stats[log.channel_names[present[j]]];
               a.nis += nu[j] * nu[j] / S(j, j);
               a.innovation_squares += nu[j] * nu[j];
+              a.innovation_variance += S(j, j);
               ++a.count;
             }
           }
@@ -603,7 +607,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   problem.prior = prior_std.cwiseAbs2().asDiagonal();
   result.prior_covariance = problem.prior;
   for (int i = 0; i < kNumStates; ++i) problem.qx[i] = options.state_psd[i];
-  const int passes = covariance_pass ? 2 : 1;
+  const int passes = (covariance_pass ? 2 : 1) + options.noise_adaptations;
   problem.total_rows = rows_per_pass * passes;
 
   // Histories.
@@ -655,10 +659,26 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
     result.integrator.restarts += pass.integrator.restarts;
   };
 
-  // Pass 1: estimation.
+  // Pass 1: estimation; with noise adaptation, first the passes that
+  // re-estimate R from their innovations.
+  result.noise_initial = noise;
   PassRecord record1;
   record1.parameters = true;
   record1.innovations = true;
+  for (int a = 0; a < options.noise_adaptations; ++a) {
+    const PassResult pass = RunPass(problem, p0, false, false, record1, &result.logs, &rows_done);
+    if (!pass.ok) return failed(pass);
+    add_effort(pass);
+    // Mehra (1970): E[nu nu^T] = H P H^T + R, so R_ii = mean(nu_i^2 - (H P H^T)_ii)
+    // = R_ii + mean(nu_i^2 - S_ii) over the updates after the burn-in.
+    for (const auto& [name, acc] : pass.channel_stats) {
+      if (acc.count < 10) continue;
+      const double r_old = problem.noise.std.at(name) * problem.noise.std.at(name);
+      const double r_new = r_old + (acc.innovation_squares - acc.innovation_variance) / acc.count;
+      problem.noise.std[name] = std::sqrt(std::max(r_new, 1e-4 * r_old));
+    }
+  }
+  result.noise = problem.noise;
   record1.states = !covariance_pass;
   const Clock::time_point c1 = Clock::now();
   const PassResult pass1 = RunPass(problem, p0, false, options.smoother && !covariance_pass,
@@ -680,7 +700,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
     record2.std_at_estimate = true;
     Vehicle at_estimate = anchored;
     at_estimate.parameters = result.parameters;
-    const Problem problem2{at_estimate, logs, noise, options, free, problem.lower, problem.upper,
+    const Problem problem2{at_estimate, logs, problem.noise, options, free, problem.lower, problem.upper,
                            problem.qp, problem.prior, problem.qx, problem.total_rows};
     const Clock::time_point c2 = Clock::now();
     const PassResult pass2 =

@@ -116,6 +116,13 @@ struct EkfOptions {
   IntegratorOptions integrator = DefaultIntegrator();
 
   bool covariance_pass = true;  // see the header comment
+  // Re-estimate the measurement noise from the innovations (Mehra 1970:
+  // R_ii = mean(nu_i^2 - (H P H^T)_ii) after the burn-in) this many times,
+  // each time with a full estimation pass, before the final passes. The
+  // first-difference estimate (NoiseFromData) overstates R where a channel
+  // moves between samples (the yaw rate by 2x in variance on the shipped
+  // flight), which makes every std too large and the NIS too small.
+  int noise_adaptations = 0;
   bool smoother = true;
 
   enum class ScaleAnchor { kHubDistance, kNone };
@@ -221,6 +228,9 @@ struct EkfResult {
   // which the filtered estimate stays within 3 final std of its final value.
   std::vector<double> settled_after_s;
   long clamped = 0;  // projections onto bounds
+  // Measurement noise std given, and used in the final passes (differs with
+  // noise_adaptations > 0).
+  NoiseWeights noise_initial, noise;
   // Log-likelihood of pass 1's innovations (prediction-error form, every
   // update): -1/2 sum_k (nu_k^T S_k^-1 nu_k + log det S_k + m_k log 2 pi).
   double log_likelihood = 0;

@@ -169,9 +169,16 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
       {"parameter_psd_scaled", options.parameter_psd},
       {"parameter_psd_by_name", options.parameter_psd_by_name}};
   ekf["initial_parameter_std_scaled"] = options.initial_parameter_std;
-  json noise = json::object();
-  for (const auto& [name, s] : context.noise.std) noise[name] = Number(s);
-  ekf["measurement_noise"] = {{"std", noise}, {"source", context.noise_source}};
+  json noise = json::object(), noise_initial = json::object();
+  for (const auto& [name, s] : r.noise.std) noise[name] = Number(s);
+  for (const auto& [name, s] : r.noise_initial.std) noise_initial[name] = Number(s);
+  ekf["measurement_noise"] = {
+      {"std", noise},
+      {"initial_std", noise_initial},
+      {"initial_source", context.noise_source},
+      {"adaptations", options.noise_adaptations},
+      {"adaptation", "R_ii = mean(nu_i^2 - (H P H^T)_ii) over the estimation pass's updates "
+                     "after the burn-in (Mehra 1970), then the estimation is run again"}};
   ekf["integrator"] = {{"relative_tolerance", options.integrator.relative_tolerance},
                        {"absolute_tolerance", options.integrator.absolute_tolerance}};
 

@@ -1,12 +1,29 @@
+// The EKF (ident/ekf.h) on seeded simulated flight logs: the closed-loop
+// flight of configs/scenarios/flight.yaml (truth differs from the config's
+// nominal values by up to 30 %), replayed to get the true states.
+//
+// Tolerances. The filter's reported std are tested as such: an estimate
+// within 3 std of the truth (two-sided 99.7 % for a consistent estimator; with
+// 11 parameters a 3 % chance of one miss per seed, and the seeds here are
+// fixed: over nine seeds the largest miss measured was 2.2 std), state errors
+// within 3 std for at least 99 % of the samples after a 10 s convergence
+// (a consistent filter: 99.7 %), and the mean NIS inside its two-sided 95 %
+// chi-square band (every channel inside its Bonferroni band 1 - 0.05/15).
+// The measurement noise given to the filter is the simulation's own, so that
+// these tests check the filter and not the noise estimate (the CLI test and
+// the noise-adaptation test cover that).
 #include "ident/ekf.h"
 
 #include <gtest/gtest.h>
 
-#include <chrono>
+#include <cmath>
+#include <limits>
+#include <random>
 
 #include <glog/logging.h>
-#include <cstdio>
 
+#include "core/errors.h"
+#include "dynamics/effects/effect_library.h"
 #include "dynamics/trim.h"
 #include "experiments/scenario.h"
 #include "experiments/simulate_experiment.h"
@@ -17,15 +34,16 @@ namespace {
 std::string Source(const std::string& rel) { return std::string(COAXID_SOURCE_DIR) + "/" + rel; }
 
 struct SimulatedFlight {
-  Vehicle config;     // the config's vehicle (nominal values)
+  Vehicle config;  // the config's vehicle (nominal values)
   Vehicle truth;
   FlightScenario scenario;
   Log log;
   std::vector<State> truth_states;  // at every row
 };
 
-// The truth states at every row, replayed with exactly the arithmetic of
-// SimulateFlight (same integrator, same times, same inputs): bit-identical.
+// The true states at every row, replayed with exactly the arithmetic of
+// SimulateFlight (same integrator and options, same times, same inputs, same
+// trim start): bit-identical to the simulation's own states.
 std::vector<State> ReplayTruth(const Vehicle& truth, const FlightScenario& s, const Log& log) {
   const Eigen::VectorXd theta = truth.parameters.Values();
   const Waypoint start = s.waypoints.front();
@@ -48,7 +66,7 @@ std::vector<State> ReplayTruth(const Vehicle& truth, const FlightScenario& s, co
   return states;
 }
 
-SimulatedFlight Simulate(double duration_s, uint64_t seed) {
+SimulatedFlight Simulate(double duration_s, uint64_t seed, double rate_hz = 200) {
   SimulatedFlight f;
   const VehicleConfig config = LoadVehicleConfig(Source("configs/glmav.yaml"));
   const Scenario scenario = LoadScenario(Source("configs/scenarios/flight.yaml"));
@@ -56,9 +74,16 @@ SimulatedFlight Simulate(double duration_s, uint64_t seed) {
   f.truth = MakeTruthVehicle(config, scenario);
   f.scenario = scenario.flight;
   f.scenario.duration_s = duration_s;
+  f.scenario.rate_hz = rate_hz;
   f.log = SimulateFlight(f.truth, f.scenario, seed);
   f.log.source = "simulated";
   f.truth_states = ReplayTruth(f.truth, f.scenario, f.log);
+  return f;
+}
+
+// 60 s, 200 Hz, seed 5: shared by the tests (0.2 s to make).
+const SimulatedFlight& Flight() {
+  static const SimulatedFlight f = Simulate(60, 5);
   return f;
 }
 
@@ -68,108 +93,493 @@ NoiseWeights TruthNoise(const FlightScenario& s) {
   return w;
 }
 
-double Env(const char* name, double fallback) { return getenv(name) ? atof(getenv(name)) : fallback; }
-
-TEST(EkfDiagnostics, Run) {
-  EkfOptions options;
-  options.smoother = getenv("SMOOTH") != nullptr;
-  for (int i : {3, 4, 5}) options.state_psd[i] = Env("QV", options.state_psd[i]);
-  for (int i : {9, 10, 11}) options.state_psd[i] = Env("QR", options.state_psd[i]);
-  for (int i : {0, 1, 2, 6, 7, 8}) options.state_psd[i] = Env("QA", options.state_psd[i]);
-  options.parameter_psd = Env("QP", options.parameter_psd);
-  if (getenv("RTOL")) {
-    options.integrator.relative_tolerance = Env("RTOL", 0);
-    options.integrator.absolute_tolerance = Env("RTOL", 0) * 1e-2;
-  }
-  if (getenv("ONEPASS")) options.covariance_pass = false;
-  if (getenv("FREE")) options.scale_anchor = EkfOptions::ScaleAnchor::kNone;
-  if (getenv("SENS")) options.transition = EkfTransitionMethod::kSensitivities;
-  SimulatedFlight f = Simulate(Env("DUR", 60), static_cast<uint64_t>(Env("SEED", 5)));
-  if (getenv("NOACC")) {
-    for (const char* c : {"ax", "ay", "az"}) {
-      for (double& x : f.log.values[f.log.ColumnIndex(c)]) x = NAN;
-    }
-  }
+// The config's vehicle with d fixed at its true value (the user's way to fix
+// the scale, model.md decision 8): the other 11 unknowns are augmented.
+Vehicle WithTrueD(const SimulatedFlight& f) {
   Vehicle v = f.config;
-  auto anchored_truth = [&](const std::string& nm) {
-    double val = f.truth.parameters.Value(nm);
-    if (nm == "gamma1" || nm == "gamma2" || nm[0] == 'I') val *= 0.1 / 0.11;
-    return val;
-  };
-  if (getenv("ATTRUTH")) {
-    for (const char* name : {"alpha", "beta", "sigma0", "Cx", "Cy", "Cz", "gamma1", "gamma2",
-                             "Ixx", "Iyy", "Izz"}) {
-      v.parameters.SetValue(name, anchored_truth(name));
-    }
-    options.initial_parameter_std = Env("ATTRUTH", 0.5);
-  }
-  const std::vector<EstimationLog> logs{MakeEstimationLog(f.log)};
-  if (getenv("PROFILE")) {
-    for (double s0 : {0.08, 0.09, 0.10, 0.11, 0.12, 0.13, 0.14}) {
-      Vehicle w = f.config;
-      w.parameters.SetValue("sigma0", s0);
-      w.parameters.SetEstimated("sigma0", false);
-      EkfOptions o = options; o.smoother = false;
-      const EkfResult a = RunEkf(w, logs, TruthNoise(f.scenario), o);
-      for (size_t k = 0; k < a.free_names.size(); ++k) w.parameters.SetValue(a.free_names[k], a.estimate[k]);
-      for (int i = 0; i < w.parameters.size(); ++i) w.parameters.mutable_parameter(i).estimated = false;
-      w.parameters.SetEstimated("d", false);
-      const EkfResult b = RunEkf(w, logs, TruthNoise(f.scenario), o);
-      printf("sigma0 %.2f  filter LL %.2f fixed LL %.2f alpha %.4e beta %.4e\n", s0, a.log_likelihood, b.log_likelihood, a.estimate[0], a.estimate[1]);
-    }
-  }
-  const auto t0 = std::chrono::steady_clock::now();
-  EkfResult r = RunEkf(v, logs, TruthNoise(f.scenario), options);
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  printf("usable %d %s total %.3f s (prop %.3f upd %.3f smooth %.3f) wall %.3f clamped %ld loglik %.3f\n",
-         r.usable, r.failure.c_str(), r.total_s, r.propagation_s, r.update_s, r.smoother_s, secs,
-         r.clamped, r.log_likelihood);
+  v.parameters.SetValue("d", f.truth.parameters.Value("d"));
+  v.parameters.SetEstimated("d", false);
+  return v;
+}
+
+// The flight's EKF with d fixed at the truth and the smoother on.
+const EkfResult& Estimated() {
+  static const EkfResult r = [] {
+    EkfOptions options;
+    options.smoother = true;
+    return RunEkf(WithTrueD(Flight()), {MakeEstimationLog(Flight().log)},
+                  TruthNoise(Flight().scenario), options);
+  }();
+  return r;
+}
+
+TEST(EkfTest, ChiSquareBandMatchesKnownQuantiles) {
+  // chi2(10): 2.5 % and 97.5 % quantiles 3.24697 and 20.4832 (tables).
+  auto [lo10, hi10] = ChiSquareMeanBand(10);
+  EXPECT_NEAR(lo10, 0.324697, 0.01 * 0.324697);  // Wilson-Hilferty: < 1 % at dof 10
+  EXPECT_NEAR(hi10, 2.04832, 0.01 * 2.04832);
+  // Large dof: 1 +- 1.95996 sqrt(2 / dof) to first order.
+  auto [lo, hi] = ChiSquareMeanBand(1e4);
+  EXPECT_NEAR(lo, 1 - 1.95996 * std::sqrt(2e-4), 5e-4);
+  EXPECT_NEAR(hi, 1 + 1.95996 * std::sqrt(2e-4), 5e-4);
+}
+
+TEST(EkfTest, ParametersWithinThreeStdOfTruth) {
+  const EkfResult& r = Estimated();
+  ASSERT_TRUE(r.usable) << r.failure;
+  ASSERT_EQ(r.free_names.size(), 11u);
   for (size_t k = 0; k < r.free_names.size(); ++k) {
-    const double truth = anchored_truth(r.free_names[k]);
-    printf("%-8s %+.5e +- %.2e truth(d-anchored) %+.5e  z=%+.2f ident %d settled %.1f\n",
-           r.free_names[k].c_str(), r.estimate[k], r.estimate_std[k], truth,
-           (r.estimate[k] - truth) / r.estimate_std[k], (int)r.identifiable[k],
-           r.settled_after_s[k]);
+    const std::string& name = r.free_names[k];
+    const double truth = Flight().truth.parameters.Value(name);
+    EXPECT_TRUE(r.identifiable[k]) << name;
+    EXPECT_LE(std::fabs(r.estimate[k] - truth), 3 * r.estimate_std[k])
+        << name << ": " << r.estimate[k] << " +- " << r.estimate_std[k] << ", truth " << truth;
+    // Informative, not passing on a prior-sized std: every std at most half
+    // its prior (0.5 of the scale).
+    const double prior = std::sqrt(r.prior_covariance(k, k)) * r.scales[k];
+    EXPECT_LT(r.estimate_std[k], 0.5 * prior) << name;
   }
-  for (const auto& n : r.notes) printf("note: %s\n", n.c_str());
-  for (const auto& q : r.ratios) printf("ratio %s %g +- %g\n", q.name.c_str(), q.value, q.std);
-  for (const auto& s : r.channel_nis) {
-    printf("NIS %-6s %.4f [%.4f %.4f] n %ld rms %.4g\n", s.channel.c_str(), s.mean, s.lower,
-           s.upper, s.dof, s.innovation_rms);
-  }
-  printf("NIS all %.4f [%.4f %.4f]\n", r.total_nis.mean, r.total_nis.lower, r.total_nis.upper);
-  if (getenv("LL")) {
-    Vehicle at_truth = f.config, at_est = f.config;
-    for (size_t k = 0; k < r.free_names.size(); ++k) {
-      at_truth.parameters.SetValue(r.free_names[k], anchored_truth(r.free_names[k]));
-      at_est.parameters.SetValue(r.free_names[k], r.estimate[k]);
-    }
-    for (Vehicle* w : {&at_truth, &at_est}) {
-      for (int i = 0; i < w->parameters.size(); ++i) w->parameters.mutable_parameter(i).estimated = false;
-    }
-    EkfOptions o2 = options;
-    o2.smoother = false;
-    const EkfResult rt = RunEkf(at_truth, logs, TruthNoise(f.scenario), o2);
-    const EkfResult re = RunEkf(at_est, logs, TruthNoise(f.scenario), o2);
-    printf("loglik fixed truth %.3f fixed estimate %.3f\n", rt.log_likelihood, re.log_likelihood);
-  }
-  if (getenv("COVPASS")) {
-    Vehicle w = v;
-    for (size_t k = 0; k < r.free_names.size(); ++k) w.parameters.SetValue(r.free_names[k], r.estimate[k]);
-    const EkfResult& c = r;
-    for (size_t k = 0; k < r.free_names.size(); ++k) {
-      const double truth = anchored_truth(r.free_names[k]);
-      printf("COV %-8s %+.5e +- %.2e (pass-1 std %.2e) z=%+.2f\n", r.free_names[k].c_str(), r.estimate[k], c.estimate_std[k], r.estimate_std[k], (r.estimate[k] - truth) / c.estimate_std[k]);
+}
+
+TEST(EkfTest, StateErrorsWithinThreeStd) {
+  const EkfResult& r = Estimated();
+  ASSERT_TRUE(r.usable) << r.failure;
+  const EkfLogHistory& h = r.logs[0];
+  const std::vector<State>& truth = Flight().truth_states;
+  ASSERT_EQ(h.times.size(), truth.size());
+  for (const bool smoothed : {false, true}) {
+    const Eigen::MatrixXd& x = smoothed ? h.smoothed_states : h.states;
+    const Eigen::MatrixXd& s = smoothed ? h.smoothed_state_std : h.state_std;
+    for (int i = 0; i < kNumStates; ++i) {
+      int inside = 0, counted = 0;
+      for (size_t k = 0; k < truth.size(); ++k) {
+        if (h.times[k] < 10.0) continue;  // after convergence
+        ++counted;
+        if (std::fabs(x(k, i) - truth[k][i]) <= 3 * s(k, i)) ++inside;
+      }
+      EXPECT_GE(inside, 0.99 * counted)
+          << (smoothed ? "smoothed " : "filtered ") << StateName(i) << ": " << inside << " of "
+          << counted;
     }
   }
-  if (getenv("HIST")) {
-    const auto& h = r.logs[0];
-    for (size_t row = 0; row < h.times.size(); row += 1000) {
-      printf("t %5.1f", h.times[row]);
-      for (int k = 0; k < 3; ++k) printf("  %s %+.4e +- %.2e", r.free_names[k].c_str(), h.parameters(row, k), h.parameter_std(row, k));
-      printf("\n");
+  // The smoother never reports more uncertainty than the filter.
+  for (size_t k = 0; k < h.times.size(); ++k) {
+    for (int i = 0; i < kNumStates; ++i) {
+      ASSERT_LE(h.smoothed_state_std(k, i), h.state_std(k, i) * (1 + 1e-9) + 1e-15)
+          << StateName(i) << " row " << k;
     }
   }
+}
+
+TEST(EkfTest, InnovationsConsistent) {
+  const EkfResult& r = Estimated();
+  ASSERT_TRUE(r.usable) << r.failure;
+  EXPECT_TRUE(r.total_nis.consistent()) << "mean NIS per dof " << r.total_nis.mean << " not in ["
+                                        << r.total_nis.lower << ", " << r.total_nis.upper << "]";
+  ASSERT_EQ(r.channel_nis.size(), 15u);
+  for (const NisStatistic& s : r.channel_nis) {
+    const auto [lo, hi] = ChiSquareMeanBand(static_cast<double>(s.dof), 1 - 0.05 / 15);
+    EXPECT_GE(s.mean, lo) << s.channel;
+    EXPECT_LE(s.mean, hi) << s.channel;
+  }
+}
+
+TEST(EkfTest, CovariancePassFixesOverconfidenceOnWeakDirections) {
+  // sigma0 is separated from the overall alpha, beta scale only by the lower
+  // rotor's lateral force. The profile log-likelihood over sigma0 on this
+  // flight has a curvature std of ~0.014; the single pass claims far less.
+  const EkfResult& r = Estimated();
+  ASSERT_TRUE(r.usable) << r.failure;
+  int k = -1;
+  for (size_t j = 0; j < r.free_names.size(); ++j) {
+    if (r.free_names[j] == "sigma0") k = static_cast<int>(j);
+  }
+  ASSERT_GE(k, 0);
+  EXPECT_GT(r.estimate_std[k], 0.009);   // covariance pass: ~0.013
+  EXPECT_LT(r.filter_std[k], 0.6 * r.estimate_std[k]);  // single pass: ~0.005
+}
+
+TEST(EkfTest, ScaleAnchoredByDefault) {
+  const SimulatedFlight& f = Flight();
+  EkfOptions options;
+  options.smoother = false;
+  const EkfResult r = RunEkf(f.config, {MakeEstimationLog(f.log)}, TruthNoise(f.scenario), options);
+  ASSERT_TRUE(r.usable) << r.failure;
+  EXPECT_EQ(r.anchored, "d");
+  EXPECT_FALSE(r.parameters.Get("d").estimated);
+  EXPECT_EQ(r.parameters.Value("d"), f.config.parameters.Value("d"));
+  EXPECT_TRUE(r.undetermined.empty());
+  ASSERT_EQ(r.ratios.size(), 5u);
+  for (const ScaleRatio& q : r.ratios) {
+    const double truth = f.truth.parameters[q.numerator].value /
+                         f.truth.parameters[q.denominator].value;
+    EXPECT_LE(std::fabs(q.value - truth), 3 * q.std) << q.name << " " << q.value << " +- "
+                                                     << q.std << ", truth " << truth;
+  }
+}
+
+TEST(EkfTest, UnanchoredScaleIsReportedNotInvented) {
+  const SimulatedFlight& f = Flight();
+  EkfOptions options;
+  options.smoother = false;
+  options.scale_anchor = EkfOptions::ScaleAnchor::kNone;
+  const EkfResult r = RunEkf(f.config, {MakeEstimationLog(f.log)}, TruthNoise(f.scenario), options);
+  ASSERT_TRUE(r.usable) << r.failure;
+  ASSERT_EQ(r.free_names.size(), 12u);
+  EXPECT_TRUE(r.anchored.empty());
+  ASSERT_EQ(r.undetermined.size(), 1u);
+  // With the parameters' mean fixed in the covariance pass the direction gets
+  // exactly no information (ratio 1 up to the random walk, 1e-10 / s).
+  EXPECT_NEAR(r.undetermined[0].variance_ratio, 1.0, 1e-3);
+  EXPECT_GT(r.undetermined[0].cos_to_scale, 0.999);
+  for (size_t k = 0; k < r.free_names.size(); ++k) {
+    const std::string& name = r.free_names[k];
+    const bool in_group = name == "d" || name == "gamma1" || name == "gamma2" ||
+                          name == "Ixx" || name == "Iyy" || name == "Izz";
+    EXPECT_EQ(r.identifiable[k], !in_group) << name;
+  }
+  ASSERT_EQ(r.ratios.size(), 5u);
+  for (const ScaleRatio& q : r.ratios) {
+    const double truth = f.truth.parameters[q.numerator].value /
+                         f.truth.parameters[q.denominator].value;
+    EXPECT_LE(std::fabs(q.value - truth), 3 * q.std) << q.name;
+  }
+}
+
+TEST(EkfTest, ScaleDirectionFollowsTheModel) {
+  const Vehicle base = LoadVehicle(Source("configs/glmav.yaml"));
+  const SimulatedFlight& f = Flight();
+  std::vector<ModelSample> samples;
+  for (int k = 0; k < f.log.NumRows(); k += 1500) {
+    samples.push_back({f.truth_states[k], InputHold::FromLog(f.log).input(k)});
+  }
+  const ScaleDirection plain = FindScaleDirection(base.model, base.parameters, samples);
+  ASSERT_TRUE(plain.exists);
+  EXPECT_LT(plain.residual, 1e-12);
+  std::vector<std::string> names;
+  for (int i : plain.group) names.push_back(base.parameters[i].name);
+  EXPECT_EQ(names, (std::vector<std::string>{"gamma1", "gamma2", "d", "Ixx", "Iyy", "Izz"}));
+  for (int i : plain.group) EXPECT_DOUBLE_EQ(plain.direction[i], base.parameters[i].value);
+
+  // Every effect at its typical strength: moment-type parameters join the
+  // group with v = theta (they scale with the moments), force-type ones do not.
+  Vehicle all = base;
+  for (const auto& info : EffectLibrary()) {
+    std::map<std::string, ParameterOverride> overrides;
+    for (const auto& spec : info.parameters) overrides[spec.name].value = spec.typical;
+    all = WithEffect(all, info.name, overrides);
+  }
+  const ScaleDirection with_effects = FindScaleDirection(all.model, all.parameters, samples);
+  ASSERT_TRUE(with_effects.exists) << with_effects.residual;
+  auto coefficient = [&](const std::string& name) {
+    return with_effects.direction[all.parameters.IndexOrThrow(name)] / all.parameters.Value(name);
+  };
+  for (const char* name : {"gyroscopic.J_r", "rotor_damping.k_pq", "cg_offset.x_g",
+                           "cg_offset.y_g"}) {
+    EXPECT_NEAR(coefficient(name), 1.0, 1e-6) << name;
+  }
+  for (const char* name : {"swashplate_bias.b_x", "wind.wn", "ground_effect.k_ge"}) {
+    EXPECT_EQ(with_effects.direction[all.parameters.IndexOrThrow(name)], 0.0) << name;
+  }
+}
+
+TEST(EkfTest, LinearisedTransitionMatchesSensitivities) {
+  // Phi from exp(midpoint Jacobian h) against the variational equations, over
+  // a 5 ms interval and a 30 ms one (three 10 ms sub-steps), all 12 unknowns.
+  // Local error O(h^3 |dA/dt| |A|): ~1e-6 of Phi's largest entries at 5 ms.
+  const SimulatedFlight& f = Flight();
+  const ParameterSet& parameters = f.truth.parameters;
+  std::vector<int> free;
+  for (int i = kAlpha; i < kNumBaseParameters; ++i) free.push_back(i);
+  Eigen::VectorXd scales(free.size());
+  for (size_t k = 0; k < free.size(); ++k) scales[k] = parameters[free[k]].scale;
+  const Eigen::Matrix<double, kNumStates, 1> qx =
+      Eigen::Matrix<double, kNumStates, 1>::Constant(1e-5);
+  const Eigen::VectorXd qp = Eigen::VectorXd::Constant(free.size(), 1e-6);
+  IntegratorOptions tight;
+  tight.relative_tolerance = 1e-10;
+  tight.absolute_tolerance = 1e-12;
+  tight.sensitivity_error_control = true;
+  EkfPropagator linearised(f.truth.model, parameters.Values(), free, scales, qx, qp,
+                           EkfTransitionMethod::kLinearised, tight, 0.01);
+  EkfPropagator sensitivities(f.truth.model, parameters.Values(), free, scales, qx, qp,
+                              EkfTransitionMethod::kSensitivities, tight, 1.0);
+  const InputHold inputs = InputHold::FromLog(f.log);
+  for (int row : {1000, 4000, 9000}) {
+    for (double h : {0.005, 0.03}) {
+      const double t0 = inputs.time(row);
+      EkfTransition a, b;
+      ASSERT_TRUE(linearised.Propagate(t0, t0 + h, inputs.input(row), f.truth_states[row], &a));
+      ASSERT_TRUE(sensitivities.Propagate(t0, t0 + h, inputs.input(row), f.truth_states[row], &b));
+      EXPECT_LT((a.x - b.x).cwiseAbs().maxCoeff(), 1e-9);  // both CVODE at 1e-10
+      const double tol = h < 0.01 ? 1e-5 : 1e-4;
+      EXPECT_LT((a.A - b.A).cwiseAbs().maxCoeff(), tol * b.A.cwiseAbs().maxCoeff())
+          << "row " << row << " h " << h;
+      EXPECT_LT((a.B - b.B).cwiseAbs().maxCoeff(), tol * b.B.cwiseAbs().maxCoeff())
+          << "row " << row << " h " << h;
+      // Qd: the trapezoidal rule on the sub-steps vs on the whole interval:
+      // O((|A| h)^2) relative, a few per cent at most at 30 ms.
+      EXPECT_LT((a.Qxx - b.Qxx).cwiseAbs().maxCoeff(), 0.05 * b.Qxx.cwiseAbs().maxCoeff()) << "a\n" << a.Qxx << "\nb\n" << b.Qxx;
+    }
+  }
+}
+
+TEST(EkfTest, OutputJacobianMatchesCentralDifferences) {
+  // Accelerometer rows of H against central differences of FlightOutputs.
+  // Step 1e-6 in each (scaled) coordinate; truncation ~1e-12, rounding
+  // ~eps |y| / h ~ 1e-9 (|y| ~ 10 m/s^2): tolerance 1e-6 absolute on entries
+  // of order 0.1 to 10.
+  const SimulatedFlight& f = Flight();
+  std::vector<int> free;
+  for (int i = kAlpha; i < kNumBaseParameters; ++i) free.push_back(i);
+  Eigen::VectorXd scales(free.size());
+  for (size_t k = 0; k < free.size(); ++k) scales[k] = f.truth.parameters[free[k]].scale;
+  const Eigen::VectorXd theta = f.truth.parameters.Values();
+  const InputHold inputs = InputHold::FromLog(f.log);
+  for (int row : {500, 6000}) {
+    const State x = f.truth_states[row];
+    const InputVector u = inputs.input(row);
+    Eigen::Matrix<double, kNumFlightChannels, 1> y;
+    Eigen::Matrix<double, 3, Eigen::Dynamic> H;
+    ASSERT_TRUE(FlightOutputsAndJacobian(f.truth.model, theta, free, scales, x, u, &y, &H));
+    ASSERT_EQ(H.cols(), kNumStates + static_cast<int>(free.size()));
+    const double step = 1e-6;
+    for (int dir = 0; dir < H.cols(); ++dir) {
+      State xp = x, xm = x;
+      Eigen::VectorXd tp = theta, tm = theta;
+      if (dir < kNumStates) {
+        xp[dir] += step;
+        xm[dir] -= step;
+      } else {
+        tp[free[dir - kNumStates]] += step * scales[dir - kNumStates];
+        tm[free[dir - kNumStates]] -= step * scales[dir - kNumStates];
+      }
+      double yp[kNumFlightChannels], ym[kNumFlightChannels];
+      FlightOutputs(f.truth.model, tp.data(), xp.data(), u.data(), yp);
+      FlightOutputs(f.truth.model, tm.data(), xm.data(), u.data(), ym);
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(H(i, dir), (yp[kAx + i] - ym[kAx + i]) / (2 * step), 1e-6)
+            << "row " << row << " output " << i << " direction " << dir;
+      }
+    }
+  }
+}
+
+TEST(EkfTest, MissingChannelsAndIrregularRows) {
+  // A 30 s log made irregular without changing its truth: extra rows inserted
+  // inside hold intervals (same inputs, so the same zero-order hold) at random
+  // times, with attitude and rates only; u, v, w not logged at all; x, y, z
+  // at 10 Hz only; 30 % of the accelerometer rows missing.
+  const SimulatedFlight f = Simulate(30, 11);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(0.1, 0.9);
+  std::bernoulli_distribution insert(0.3), drop_acc(0.3);
+  const std::vector<std::string> keep = {"t",     "omega1", "omega2", "delta_cx", "delta_cy",
+                                         "x",     "y",      "z",      "phi",      "theta",
+                                         "psi",   "p",      "q",      "r",        "ax",
+                                         "ay",    "az"};
+  Log out;
+  out.kind = LogKind::kFlight;
+  out.columns = keep;
+  out.values.resize(keep.size());
+  out.source = "irregular";
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const int N = f.log.NumRows();
+  int inserted = 0;
+  for (int k = 0; k < N; ++k) {
+    for (size_t c = 0; c < keep.size(); ++c) {
+      double v = f.log.Column(keep[c])[k];
+      const std::string& name = keep[c];
+      if ((name == "x" || name == "y" || name == "z") && k % 20 != 0) v = nan;
+      if ((name == "ax" || name == "ay" || name == "az") && drop_acc(rng)) v = nan;
+      out.values[c].push_back(v);
+    }
+    if (k + 1 < N && insert(rng)) {
+      // A row inside [t_k, t_k+1) with row k's inputs: attitude and rates of
+      // the truth there plus the sensor noise, other outputs missing.
+      ++inserted;
+      const double t = f.log.Column("t")[k] + unit(rng) * (f.log.Column("t")[k + 1] -
+                                                          f.log.Column("t")[k]);
+      VehicleOde ode(f.truth.model, f.truth.parameters.Values());
+      ode.SetInput(InputHold::FromLog(f.log).input(k));
+      Integrator integrator(ode, IntegratorOptions{});
+      Eigen::VectorXd x;
+      ASSERT_TRUE(integrator.Reset(f.log.Column("t")[k], f.truth_states[k]) &&
+                  integrator.AdvanceTo(t, &x));
+      std::normal_distribution<double> noise(0, 1);
+      for (size_t c = 0; c < keep.size(); ++c) {
+        const std::string& name = keep[c];
+        double v = nan;
+        if (name == "t") v = t;
+        if (c >= 1 && c <= 4) v = out.values[c].back();
+        const int state = FlightChannelIndex(name);
+        if (state >= kPhi && state < kNumStates) {
+          v = x[state] + f.scenario.noise_std.at(name) * noise(rng);
+        }
+        out.values[c].push_back(v);
+      }
+    }
+  }
+  ASSERT_GT(inserted, 1000);
+  const EstimationLog log = MakeEstimationLog(out);
+  EXPECT_EQ(log.ChannelColumn(kU), -1);
+  EkfOptions options;
+  options.smoother = true;
+  const EkfResult r = RunEkf(WithTrueD(f), {log}, TruthNoise(f.scenario), options);
+  ASSERT_TRUE(r.usable) << r.failure;
+  EXPECT_TRUE(r.logs[0].states.allFinite());
+  EXPECT_TRUE(r.logs[0].smoothed_states.allFinite());
+  for (size_t k = 0; k < r.free_names.size(); ++k) {
+    const double truth = f.truth.parameters.Value(r.free_names[k]);
+    EXPECT_LE(std::fabs(r.estimate[k] - truth), 3 * r.estimate_std[k]) << r.free_names[k];
+  }
+  // Unlogged velocities are estimated from the rest: within 3 std of the
+  // truth on 99 % of the original rows after convergence.
+  int inside = 0, counted = 0;
+  size_t row = 0;
+  for (int k = 0; k < N; ++k) {
+    while (r.logs[0].times[row] < f.log.Column("t")[k]) ++row;
+    if (f.log.Column("t")[k] < 10) continue;
+    for (int i : {kU, kV, kW}) {
+      ++counted;
+      if (std::fabs(r.logs[0].smoothed_states(row, i) - f.truth_states[k][i]) <=
+          3 * r.logs[0].smoothed_state_std(row, i)) {
+        ++inside;
+      }
+    }
+  }
+  EXPECT_GE(inside, 0.99 * counted);
+  EXPECT_TRUE(r.total_nis.consistent()) << r.total_nis.mean;
+}
+
+TEST(EkfTest, LowRateLogUsesSubsteps) {
+  // 50 Hz: 20 ms holds, each linearised in two 10 ms sub-steps.
+  const SimulatedFlight f = Simulate(30, 12, 50);
+  EkfOptions options;
+  options.smoother = false;
+  const EkfResult r = RunEkf(WithTrueD(f), {MakeEstimationLog(f.log)}, TruthNoise(f.scenario),
+                             options);
+  ASSERT_TRUE(r.usable) << r.failure;
+  EXPECT_EQ(r.propagation.substeps, 2 * r.propagation.intervals);
+  for (size_t k = 0; k < r.free_names.size(); ++k) {
+    const double truth = f.truth.parameters.Value(r.free_names[k]);
+    EXPECT_LE(std::fabs(r.estimate[k] - truth), 3 * r.estimate_std[k]) << r.free_names[k];
+  }
+  EXPECT_TRUE(r.total_nis.consistent()) << r.total_nis.mean;
+}
+
+TEST(EkfTest, SeveralLogsChainTheParameters) {
+  // Two logs: states restart from each log's first row, the parameters carry
+  // over; the smoother runs across the boundary.
+  const SimulatedFlight a = Simulate(20, 21), b = Simulate(20, 22);
+  EkfOptions options;
+  const EkfResult r = RunEkf(WithTrueD(a), {MakeEstimationLog(a.log), MakeEstimationLog(b.log)},
+                             TruthNoise(a.scenario), options);
+  ASSERT_TRUE(r.usable) << r.failure;
+  ASSERT_EQ(r.logs.size(), 2u);
+  EXPECT_TRUE(r.logs[1].smoothed_states.allFinite());
+  for (size_t k = 0; k < r.free_names.size(); ++k) {
+    const double truth = a.truth.parameters.Value(r.free_names[k]);
+    EXPECT_LE(std::fabs(r.estimate[k] - truth), 3 * r.estimate_std[k]) << r.free_names[k];
+  }
+}
+
+TEST(EkfTest, LinearisedAndSensitivityTransitionsAgree) {
+  // The whole filter with both transition matrices on 15 s: the estimates
+  // agree to a small fraction of their std (Phi differs by ~1e-6 relative).
+  const SimulatedFlight f = Simulate(15, 13);
+  EkfOptions options;
+  options.smoother = false;
+  const std::vector<EstimationLog> logs{MakeEstimationLog(f.log)};
+  const EkfResult a = RunEkf(WithTrueD(f), logs, TruthNoise(f.scenario), options);
+  options.transition = EkfTransitionMethod::kSensitivities;
+  const EkfResult b = RunEkf(WithTrueD(f), logs, TruthNoise(f.scenario), options);
+  ASSERT_TRUE(a.usable && b.usable);
+  for (size_t k = 0; k < a.free_names.size(); ++k) {
+    EXPECT_LE(std::fabs(a.estimate[k] - b.estimate[k]), 0.05 * a.estimate_std[k])
+        << a.free_names[k];
+    EXPECT_NEAR(a.estimate_std[k], b.estimate_std[k], 0.01 * a.estimate_std[k])
+        << a.free_names[k];
+  }
+}
+
+TEST(EkfTest, NoiseAdaptationRecoversTheSensorNoise) {
+  // From the first-difference estimate (too large where a channel moves
+  // between samples), one adaptation on the innovations lands within 3 % of
+  // the simulation's noise std (sampling error of a variance from ~10^4
+  // samples: 1.4 % in std at one sigma) and brings the NIS into its band.
+  const SimulatedFlight& f = Flight();
+  const std::vector<EstimationLog> logs{MakeEstimationLog(f.log, 0, 6000)};
+  EkfOptions options;
+  options.smoother = false;
+  options.covariance_pass = false;
+  options.noise_adaptations = 1;
+  const EkfResult r = RunEkf(WithTrueD(f), logs, NoiseFromData(logs), options);
+  ASSERT_TRUE(r.usable) << r.failure;
+  for (const auto& [name, s] : r.noise.std) {
+    EXPECT_NEAR(s, f.scenario.noise_std.at(name), 0.03 * f.scenario.noise_std.at(name)) << name;
+  }
+  EXPECT_GT(r.noise_initial.std.at("r"), 1.2 * f.scenario.noise_std.at("r"));  // what it fixes
+  EXPECT_TRUE(r.total_nis.consistent()) << r.total_nis.mean;
+}
+
+TEST(EkfTest, DivergenceIsReportedWithTheTime) {
+  // From t = 10 s the roll measurement is off by 0.5 rad (a sensor fault):
+  // no state or parameter explains it, the innovations explode and the filter
+  // says where, instead of returning numbers.
+  const SimulatedFlight f = Simulate(20, 14);
+  Log log = f.log;
+  std::vector<double> phi = log.Column("phi");
+  for (int k = 0; k < log.NumRows(); ++k) {
+    if (log.Column("t")[k] >= 10.0) phi[k] += 0.5;
+  }
+  log.SetColumn("phi", phi);
+  EkfOptions options;
+  options.smoother = false;
+  const EkfResult r =
+      RunEkf(WithTrueD(f), {MakeEstimationLog(log)}, TruthNoise(f.scenario), options);
+  EXPECT_FALSE(r.usable);
+  EXPECT_NE(r.failure.find("diverged"), std::string::npos) << r.failure;
+  EXPECT_NE(r.failure.find("t = 1"), std::string::npos) << r.failure;
+  EXPECT_GE(r.failure_time, 10.0);
+  EXPECT_LT(r.failure_time, 12.0);
+}
+
+TEST(EkfTest, FailedPropagationIsReportedNotThrown) {
+  // Parameters that blow the model up (a zero inertia): Propagate says why.
+  const SimulatedFlight& f = Flight();
+  Eigen::VectorXd theta = f.truth.parameters.Values();
+  theta[kIxx] = 0.0;
+  EkfPropagator propagator(f.truth.model, theta, {}, Eigen::VectorXd(),
+                           Eigen::Matrix<double, kNumStates, 1>::Zero(), Eigen::VectorXd(),
+                           EkfTransitionMethod::kLinearised, EkfOptions::DefaultIntegrator(),
+                           0.01);
+  State x = f.truth_states[100];
+  x[kQ] = 0.3;
+  x[kR] = 0.3;  // (Iyy - Izz) q r / Ixx: infinite
+  EkfTransition transition;
+  EXPECT_FALSE(propagator.Propagate(0.0, 0.005, InputHold::FromLog(f.log).input(100), x,
+                                    &transition));
+  EXPECT_FALSE(propagator.last_error().empty());
+}
+
+TEST(EkfTest, BadInputIsAnInputError) {
+  const SimulatedFlight& f = Flight();
+  const EstimationLog log = MakeEstimationLog(f.log, 0, 100);
+  EkfOptions options;
+  NoiseWeights missing = TruthNoise(f.scenario);
+  missing.std.erase("az");
+  EXPECT_THROW(RunEkf(f.config, {log}, missing, options), InputError);
+  EkfOptions bad = options;
+  bad.initial_parameter_std = -1;
+  EXPECT_THROW(RunEkf(f.config, {log}, TruthNoise(f.scenario), bad), InputError);
+  bad = options;
+  bad.initial_parameter_std_by_name["no_such_parameter"] = 1;
+  EXPECT_THROW(RunEkf(f.config, {log}, TruthNoise(f.scenario), bad), InputError);
+  const Log balance = ReadLog(Source("data/glmav/balance_points.csv"));
+  EXPECT_THROW(RunEkf(f.config, {MakeEstimationLog(balance)}, TruthNoise(f.scenario), options),
+               InputError);
+  EXPECT_THROW(RunEkf(f.config, {}, TruthNoise(f.scenario), options), InputError);
 }
 
 }  // namespace

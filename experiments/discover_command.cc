@@ -1,0 +1,331 @@
+#include "experiments/discover_command.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/errors.h"
+#include "core/plot.h"
+#include "core/report.h"
+#include "dynamics/effects/effect_library.h"
+#include "experiments/cli.h"
+#include "experiments/cli_flags.h"
+#include "ident/balance_holds.h"
+#include "ident/discovery.h"
+
+DEFINE_double(alpha, 0.01,
+              "discover: significance level of the candidate tests (family-wise per round, Holm)");
+DEFINE_int32(max_added, 4, "discover: add at most this many effects");
+DECLARE_double(segment_s);
+
+namespace coaxid {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kDiscoverUsage =
+    "usage: coaxid discover --logs=A.csv[,B.csv] --config=F --out=DIR [--validate=C.csv] "
+    "[--holdout_fraction=0.2] [--alpha=0.01] [--max_added=4] [--segment_s=1]";
+
+void Require(const std::string& value, const char* flag) {
+  if (value.empty()) throw InputError(std::string("missing --") + flag + "\n" + kDiscoverUsage);
+}
+
+struct Split {
+  std::vector<EstimationLog> estimation, validation;
+  std::string description;
+};
+
+Split SplitLogs(const std::vector<Log>& logs, const std::vector<Log>& validate) {
+  Split s;
+  if (!validate.empty()) {
+    for (const Log& log : logs) s.estimation.push_back(MakeEstimationLog(log));
+    for (const Log& log : validate) s.validation.push_back(MakeEstimationLog(log));
+    s.description = "the --validate logs, whole";
+    return s;
+  }
+  if (FLAGS_holdout_fraction <= 0) {
+    for (const Log& log : logs) s.estimation.push_back(MakeEstimationLog(log));
+    s.description = "none (--holdout_fraction=0 and no --validate)";
+    return s;
+  }
+  s.description = "the contiguous final part of each log (--holdout_fraction=" +
+                  std::to_string(FLAGS_holdout_fraction) + "):";
+  for (const Log& log : logs) {
+    const int cut = log.kind == LogKind::kBalance
+                        ? HoldoutStartRow(log, FLAGS_holdout_fraction)
+                        : HoldoutStart(log.NumRows(), FLAGS_holdout_fraction, log.source);
+    s.estimation.push_back(MakeEstimationLog(log, 0, cut));
+    s.validation.push_back(MakeEstimationLog(log, cut));
+    s.description += " " + log.source + " rows " + std::to_string(cut + 1) + "-" +
+                     std::to_string(log.NumRows());
+  }
+  return s;
+}
+
+std::string Num(double v, const char* fmt = "%.4g") {
+  if (!std::isfinite(v)) return "-";
+  char b[64];
+  std::snprintf(b, sizeof(b), fmt, v);
+  return b;
+}
+
+Figure Autocorrelations(const DiscoveryResult& r) {
+  Figure f;
+  f.title = "Residual autocorrelation, before (declared model) and after";
+  f.columns = 3;
+  for (size_t c = 0; c < r.baseline.residual_tests.size(); ++c) {
+    const ChannelResidualTest& b = r.baseline.residual_tests[c];
+    PlotPanel p;
+    p.title = b.channel + " (Ljung-Box p " + Num(b.ljung_box_p, "%.2g");
+    p.x_label = "lag [samples]";
+    PlotSeries before{"before", {}, {}, "linespoints pt 7 ps 0.4 lc rgb '#999999'"};
+    for (size_t k = 0; k < b.autocorrelation.size(); ++k) {
+      before.x.push_back(k);
+      before.y.push_back(b.autocorrelation[k]);
+    }
+    p.series.push_back(before);
+    for (const ChannelResidualTest& a : r.final.residual_tests) {
+      if (a.channel != b.channel) continue;
+      p.title += " -> " + Num(a.ljung_box_p, "%.2g");
+      PlotSeries after{"after", {}, {}, "linespoints pt 7 ps 0.4 lc rgb 'red'"};
+      for (size_t k = 0; k < a.autocorrelation.size(); ++k) {
+        after.x.push_back(k);
+        after.y.push_back(a.autocorrelation[k]);
+      }
+      p.series.push_back(after);
+    }
+    p.title += ")";
+    f.panels.push_back(p);
+  }
+  return f;
+}
+
+Figure Spectra(const DiscoveryResult& r) {
+  Figure f;
+  f.title = "Residual periodogram, before and after";
+  f.columns = 3;
+  for (const ChannelResidualTest& b : r.baseline.residual_tests) {
+    PlotPanel p;
+    p.title = b.channel;
+    p.x_label = "frequency [Hz]";
+    p.log_y = true;
+    PlotSeries before{"before", b.frequency_hz, b.power, "lines lc rgb '#999999'"};
+    p.series.push_back(before);
+    for (const ChannelResidualTest& a : r.final.residual_tests) {
+      if (a.channel == b.channel) p.series.push_back({"after", a.frequency_hz, a.power, "lines lc rgb 'red'"});
+    }
+    for (PlotSeries& s : p.series) {
+      for (double& v : s.y) v = std::max(v, 1e-300);
+    }
+    f.panels.push_back(p);
+  }
+  return f;
+}
+
+Figure MeasuredVersusModels(const std::string& title, const EstimationLog& log,
+                            const Eigen::MatrixXd& before, const Eigen::MatrixXd& after) {
+  Figure f;
+  f.title = title;
+  f.columns = 3;
+  const bool balance = log.kind == LogKind::kBalance;
+  for (int c = 0; c < log.NumChannels(); ++c) {
+    PlotPanel panel;
+    panel.title = log.channel_names[c];
+    panel.x_label = balance ? "row" : "t [s]";
+    PlotSeries m{"measured", {}, {}, balance ? "points pt 7 ps 0.3 lc rgb '#999999'" : "lines lc rgb '#999999'"};
+    PlotSeries b{"declared model", {}, {}, "lines lc rgb 'blue'"};
+    PlotSeries a{"final model", {}, {}, "lines lc rgb 'red'"};
+    for (int k = 0; k < log.NumRows(); ++k) {
+      const double x = balance ? k : log.inputs.time(k);
+      m.x.push_back(x);
+      m.y.push_back(log.values(k, c));
+      b.x.push_back(x);
+      b.y.push_back(before(k, c));
+      a.x.push_back(x);
+      a.y.push_back(after(k, c));
+    }
+    panel.series = {m, b, a};
+    f.panels.push_back(panel);
+  }
+  return f;
+}
+
+std::string FitTable(const DiscoveryResult& r, bool has_validation) {
+  std::ostringstream o;
+  o << "| channel | rms before | rms after | nrmse before | nrmse after |";
+  if (has_validation) o << " held-out nrmse before | held-out nrmse after |";
+  o << "\n|---|---|---|---|---|" << (has_validation ? "---|---|" : "") << "\n";
+  for (const auto& [name, b] : r.baseline.fit) {
+    const FitError& a = r.final.fit.at(name);
+    o << "| " << name << " | " << Num(b.rms) << " | " << Num(a.rms) << " | " << Num(b.nrmse)
+      << " | " << Num(a.nrmse) << " |";
+    if (has_validation) {
+      auto bv = r.baseline.validation.find(name);
+      auto av = r.final.validation.find(name);
+      o << " " << (bv == r.baseline.validation.end() ? "-" : Num(bv->second.nrmse)) << " | "
+        << (av == r.final.validation.end() ? "-" : Num(av->second.nrmse)) << " |";
+    }
+    o << "\n";
+  }
+  return o.str();
+}
+
+std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::string>& logs,
+                           const std::string& validation, const std::vector<std::string>& plots,
+                           const std::string& plot_error) {
+  const bool has_validation = !r.baseline.validation.empty();
+  std::ostringstream o;
+  o << "# coaxid discover: what the declared model lacks\n\n";
+  o << "Logs: ";
+  for (const std::string& l : logs) o << "`" << l << "` ";
+  o << "\n\nHeld-out data: " << validation << "\n\n";
+  o << "Declared effects: ";
+  const auto declared = r.baseline.vehicle.EffectNames();
+  o << (declared.empty() ? "none (the paper's model)" : "");
+  for (const std::string& e : declared) o << e << " ";
+  o << "\n\n## Verdict\n\n";
+  if (r.added.empty()) {
+    o << "No library effect passes the test: nothing was added.\n";
+  } else {
+    o << "Added, in order: ";
+    for (const std::string& e : r.added) o << "**" << e << "** ";
+    o << "\n";
+  }
+  if (!r.unexplained.empty()) {
+    o << "\nChannels whose residual is still structured and that no library effect explains:\n\n";
+    for (const UnexplainedChannel& u : r.unexplained) o << "- **" << u.channel << "**: " << u.why << "\n";
+  }
+  o << "\n## Error per channel, before (declared model) and after\n\n" << FitTable(r, has_validation);
+  o << "\n## Candidates (F-test of the joint refit; Holm-corrected p)\n\n";
+  o << "| round | effect | F | p | p (Holm) | passes | channels / reason |\n|---|---|---|---|---|---|---|\n";
+  for (const CandidateScore& s : r.candidates) {
+    o << "| " << s.round << " | " << s.effect << " | "
+      << (s.testable ? Num(s.statistic) : "-") << " | " << (s.testable ? Num(s.p_value, "%.3g") : "-")
+      << " | " << (s.testable ? Num(s.p_corrected, "%.3g") : "-") << " | "
+      << (!s.testable ? "not testable" : s.passes ? "yes" : "no") << " | "
+      << (s.testable ? s.reason : s.why_not_testable) << " |\n";
+  }
+  if (!r.added.empty()) {
+    o << "\n## Added effects' parameters (final joint fit, Cramér-Rao std)\n\n| parameter | value | std |\n|---|---|---|\n";
+    const IdentifiabilityReport& id = r.final.result.identifiability;
+    for (size_t k = 0; k < id.names.size(); ++k) {
+      for (const std::string& e : r.added) {
+        if (id.names[k].rfind(e + ".", 0) != 0) continue;
+        o << "| " << id.names[k] << " | " << Num(r.final.result.parameters.Value(id.names[k]))
+          << " | " << (id.identifiable[k] ? Num(id.std[k], "%.2g") : "not identifiable") << " |\n";
+      }
+    }
+  }
+  o << "\n## Residual tests (estimation data), before and after\n\n";
+  o << "| channel | Ljung-Box p before | after | rms / noise before | after | strongest correlation after |\n|---|---|---|---|---|---|\n";
+  for (const ChannelResidualTest& b : r.baseline.residual_tests) {
+    for (const ChannelResidualTest& a : r.final.residual_tests) {
+      if (a.channel != b.channel) continue;
+      o << "| " << b.channel << " | " << Num(b.ljung_box_p, "%.2g") << " | "
+        << Num(a.ljung_box_p, "%.2g") << " | "
+        << Num(b.noise_std > 0 ? b.rms / b.noise_std : NAN, "%.2f") << " | "
+        << Num(a.noise_std > 0 ? a.rms / a.noise_std : NAN, "%.2f") << " | "
+        << (a.correlations.empty() ? "-" : a.correlations.front().with + " (r = " +
+                                                Num(a.correlations.front().r, "%.2f") + ")")
+        << " |\n";
+    }
+  }
+  o << "\n## Plots\n\n";
+  for (const std::string& p : plots) o << "![" << p << "](" << p << ")\n\n";
+  if (!plot_error.empty()) o << "Plots skipped: " << plot_error << "\n";
+  o << "\nMethod: the declared model and every candidate are fitted by output error "
+       "(all free parameters jointly). A candidate is scored by the F-test of the nested "
+       "models on the noise-weighted residual sum of squares, the noise weights of the "
+       "current model held fixed; p-values are Holm-corrected over the candidates tested in a "
+       "round. Whiteness: Ljung-Box, p-value from the regularized incomplete gamma function. "
+       "A channel is reported unexplained when its Ljung-Box p is below alpha and its rms "
+       "exceeds 1.5 times its sample-to-sample noise.\n";
+  return o.str();
+}
+
+}  // namespace
+
+int RunDiscover() {
+  Require(FLAGS_logs, "logs");
+  Require(FLAGS_config, "config");
+  Require(FLAGS_out, "out");
+  std::error_code ec;
+  if (fs::exists(FLAGS_out, ec) && !fs::is_directory(FLAGS_out, ec)) {
+    throw InputError("--out=" + FLAGS_out + " exists and is not a folder");
+  }
+  DiscoveryOptions options;
+  options.alpha = FLAGS_alpha;
+  options.max_added = FLAGS_max_added;
+  options.window_s = FLAGS_segment_s;
+  options.fit.segment_schedule_s = {std::min(0.25, FLAGS_segment_s), FLAGS_segment_s};
+  if (FLAGS_segment_s <= 0.25) options.fit.segment_schedule_s = {FLAGS_segment_s};
+  options.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("discover: " + why);
+
+  const Vehicle vehicle = LoadVehicle(FLAGS_config);
+  std::vector<Log> logs, validate;
+  for (const std::string& path : SplitList(FLAGS_logs)) logs.push_back(ReadLog(path));
+  for (const std::string& path : SplitList(FLAGS_validate)) validate.push_back(ReadLog(path));
+  if (logs.empty()) throw InputError("--logs names no file");
+  const Split split = SplitLogs(logs, validate);
+
+  const DiscoveryResult r = Discover(vehicle, split.estimation, split.validation, options);
+
+  const std::string dir = FLAGS_out;
+  fs::create_directories(dir + "/plots", ec);
+  if (ec || !fs::is_directory(dir + "/plots")) {
+    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
+  }
+  WriteFileAtomically(dir + "/config.yaml", r.final.vehicle.ResolvedConfig());
+  std::vector<std::string> plots;
+  std::string plot_error;
+  auto render = [&](const Figure& f, const std::string& name) {
+    std::string error;
+    if (RenderFigure(f, dir + "/plots/" + name + ".png", &error)) {
+      plots.push_back("plots/" + name + ".png");
+    } else if (plot_error.empty()) {
+      plot_error = error;
+    }
+  };
+  render(Autocorrelations(r), "residual_autocorrelation");
+  render(Spectra(r), "residual_spectrum");
+  for (size_t i = 0; i < split.estimation.size(); ++i) {
+    render(MeasuredVersusModels("estimation: " + split.estimation[i].source, split.estimation[i],
+                                r.baseline.result.predictions[i], r.final.result.predictions[i]),
+           "fit_" + std::to_string(i + 1) + "_" + split.estimation[i].name);
+  }
+  for (size_t i = 0; i < split.validation.size(); ++i) {
+    render(MeasuredVersusModels("held out: " + split.validation[i].source, split.validation[i],
+                                r.baseline.validation_predictions[i],
+                                r.final.validation_predictions[i]),
+           "validation_" + std::to_string(i + 1) + "_" + split.validation[i].name);
+  }
+  nlohmann::json j = DiscoveryJson(r, options);
+  nlohmann::json logs_json = nlohmann::json::array();
+  for (const Log& log : logs) logs_json.push_back(log.source);
+  j["logs"] = logs_json;
+  j["validation_data"] = split.description;
+  j["outputs"] = {{"files", {"discovery.json", "report.md", "config.yaml"}}, {"plots", plots}};
+  if (!plot_error.empty()) j["outputs"]["plots_skipped"] = plot_error;
+  WriteJson(dir + "/discovery.json", j);
+  std::vector<std::string> sources;
+  for (const Log& log : logs) sources.push_back(log.source);
+  WriteFileAtomically(dir + "/report.md",
+                      ReportMarkdown(r, sources, split.description, plots, plot_error));
+
+  std::printf("discover: added %zu effect(s)", r.added.size());
+  for (const std::string& e : r.added) std::printf(" %s", e.c_str());
+  std::printf("\n");
+  for (const UnexplainedChannel& u : r.unexplained) {
+    std::printf("  unexplained %s: %s\n", u.channel.c_str(), u.why.c_str());
+  }
+  std::fprintf(stderr, "discover: done in %.1f s -> %s/discovery.json, report.md\n", r.seconds,
+               dir.c_str());
+  return 0;
+}
+
+}  // namespace coaxid

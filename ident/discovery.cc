@@ -1,0 +1,230 @@
+#include "ident/discovery.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "core/errors.h"
+#include "core/report.h"
+
+namespace coaxid {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+void Say(const DiscoveryOptions& o, const std::string& line) {
+  if (o.progress) o.progress(line);
+}
+
+ModelSnapshot Snapshot(const Vehicle& vehicle, const OutputErrorResult& r,
+                       const std::vector<EstimationLog>& estimation,
+                       const std::vector<EstimationLog>& validation, const DiscoveryOptions& o) {
+  ModelSnapshot s;
+  s.vehicle = vehicle;
+  s.vehicle.parameters = r.parameters;
+  s.result = r;
+  s.fit = ChannelFitErrors(estimation, r.predictions);
+  s.residual_tests = AnalyseResiduals(estimation, r.predictions, o.residuals);
+  if (!validation.empty()) {
+    s.validation_predictions =
+        PredictWithFixedParameters(s.vehicle, validation, r.noise, o.window_s, o.fit);
+    s.validation = ChannelFitErrors(validation, s.validation_predictions);
+    s.validation_residual_tests =
+        AnalyseResiduals(validation, s.validation_predictions, o.residuals);
+  }
+  return s;
+}
+
+OutputErrorResult FitOrThrow(const Vehicle& v, const std::vector<EstimationLog>& logs,
+                             const OutputErrorOptions& o, const std::string& what) {
+  OutputErrorResult r = FitOutputError(v, logs, o);
+  if (!r.usable) throw ComputationError(what + " failed: " + r.why_not_usable);
+  return r;
+}
+
+nlohmann::json TestsJson(const std::vector<ChannelResidualTest>& tests) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const ChannelResidualTest& t : tests) j[t.channel] = t.ToJson();
+  return j;
+}
+
+nlohmann::json SnapshotJson(const ModelSnapshot& s, bool has_validation) {
+  nlohmann::json j = {
+      {"effects", s.vehicle.EffectNames()},
+      {"parameters", ParametersWithStdJson(s.result.parameters, s.result.identifiability)},
+      {"fit", FitJson(s.fit)},
+      {"residual_tests", TestsJson(s.residual_tests)}};
+  nlohmann::json noise = nlohmann::json::object();
+  for (const auto& [name, v] : s.result.noise.std) noise[name] = v;
+  j["noise_std"] = noise;
+  if (has_validation) {
+    j["validation"] = FitJson(s.validation);
+    j["validation_residual_tests"] = TestsJson(s.validation_residual_tests);
+  } else {
+    j["validation"] = {{"overall_nrmse", nullptr}};
+  }
+  return j;
+}
+
+}  // namespace
+
+bool DiscoveryOptions::IsValid(std::string* why) const {
+  if (!(alpha > 0 && alpha < 1)) {
+    *why = "alpha must be in (0, 1)";
+    return false;
+  }
+  if (max_added < 0) {
+    *why = "max_added must be >= 0";
+    return false;
+  }
+  if (!(window_s > 0)) {
+    *why = "window_s must be > 0";
+    return false;
+  }
+  if (residuals.lags < 1) {
+    *why = "residual lags must be >= 1";
+    return false;
+  }
+  return fit.IsValid(why);
+}
+
+nlohmann::json ParametersWithStdJson(const ParameterSet& parameters,
+                                     const IdentifiabilityReport& id) {
+  nlohmann::json out = nlohmann::json::object();
+  for (int i = 0; i < parameters.size(); ++i) {
+    const Parameter& p = parameters[i];
+    nlohmann::json e = {{"value", p.value}, {"estimated", p.estimated}};
+    if (!p.unit.empty()) e["unit"] = p.unit;
+    e["std"] = p.estimated ? nlohmann::json(nullptr) : nlohmann::json(0.0);
+    for (size_t k = 0; k < id.names.size(); ++k) {
+      if (id.names[k] != p.name) continue;
+      if (id.identifiable[k]) {
+        e["std"] = id.std[k];
+      } else {
+        e["identifiable"] = false;
+      }
+    }
+    out[p.name] = e;
+  }
+  return out;
+}
+
+DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLog>& estimation,
+                         const std::vector<EstimationLog>& validation,
+                         const DiscoveryOptions& options) {
+  const auto start = Clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("discover options: " + why);
+  if (estimation.empty()) throw InputError("discover: no estimation log");
+  DiscoveryResult out;
+
+  Say(options, "discover: fitting the declared model (" +
+                   std::to_string(declared.parameters.FreeIndices().size()) + " free parameters)");
+  OutputErrorResult fit = FitOrThrow(declared, estimation, options.fit, "the declared model's fit");
+  Vehicle current = declared;
+  current.parameters = fit.parameters;
+  out.baseline = Snapshot(current, fit, estimation, validation, options);
+
+  for (int round = 1; round <= options.max_added + 1; ++round) {
+    Say(options, "discover: round " + std::to_string(round) + ": scoring candidates against " +
+                     (out.added.empty() ? std::string("the declared model")
+                                        : "the model with " + std::to_string(out.added.size()) +
+                                              " added effect(s)"));
+    std::vector<CandidateScore> scores =
+        ScoreCandidates(current, fit, estimation, options.fit, options.alpha, round);
+    for (const CandidateScore& s : scores) {
+      char line[256];
+      std::snprintf(line, sizeof(line), "  %-18s F = %-10.4g p = %-10.3g p_holm = %-10.3g %s",
+                    s.effect.c_str(), s.statistic, s.p_value, s.p_corrected,
+                    !s.testable ? "not testable" : s.passes ? "passes" : "fails");
+      Say(options, line);
+    }
+    const CandidateScore* best = nullptr;
+    for (const CandidateScore& s : scores) {
+      if (s.passes && (!best || s.p_value < best->p_value ||
+                       (s.p_value == best->p_value && s.statistic > best->statistic))) {
+        best = &s;
+      }
+    }
+    out.candidates.insert(out.candidates.end(), scores.begin(), scores.end());
+    if (!best || static_cast<int>(out.added.size()) >= options.max_added) break;
+    Say(options, "discover: adding " + best->effect + ", refitting jointly");
+    Vehicle next = CandidateVehicle(current, best->effect);
+    next.parameters = best->parameters;  // start from the scoring refit
+    fit = FitOrThrow(next, estimation, options.fit, "the refit with " + best->effect);
+    current = next;
+    current.parameters = fit.parameters;
+    out.added.push_back(best->effect);
+  }
+  out.final = out.added.empty() ? out.baseline
+                                : Snapshot(current, fit, estimation, validation, options);
+
+  for (const ChannelResidualTest& t : out.final.residual_tests) {
+    if (!(t.ljung_box_p < options.alpha && t.rms > options.unexplained_rms_ratio * t.noise_std)) {
+      continue;
+    }
+    UnexplainedChannel u;
+    u.channel = t.channel;
+    u.ljung_box_p = t.ljung_box_p;
+    u.rms = t.rms;
+    u.noise_std = t.noise_std;
+    if (!t.correlations.empty()) {
+      u.correlates_with = t.correlations.front().with;
+      u.correlation = t.correlations.front().r;
+    }
+    char text[512];
+    std::snprintf(text, sizeof(text),
+                  "residual still structured (Ljung-Box p = %.2g, rms %.3g = %.1f x its "
+                  "sample-to-sample noise %.3g); strongest correlation: %s (r = %.2f); no "
+                  "effect in the library passes for it",
+                  t.ljung_box_p, t.rms, t.noise_std > 0 ? t.rms / t.noise_std : INFINITY,
+                  t.noise_std, u.correlates_with.c_str(), u.correlation);
+    u.why = text;
+    out.unexplained.push_back(u);
+  }
+  out.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return out;
+}
+
+nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& options) {
+  const bool has_validation = !r.baseline.validation.empty();
+  nlohmann::json candidates = nlohmann::json::array();
+  for (const CandidateScore& s : r.candidates) candidates.push_back(s.ToJson());
+  nlohmann::json unexplained = nlohmann::json::array();
+  for (const UnexplainedChannel& u : r.unexplained) {
+    unexplained.push_back({{"channel", u.channel},
+                           {"ljung_box_p", u.ljung_box_p},
+                           {"rms", u.rms},
+                           {"noise_std", u.noise_std},
+                           {"correlates_with", u.correlates_with},
+                           {"correlation", u.correlation},
+                           {"why", u.why}});
+  }
+  nlohmann::json added_parameters = nlohmann::json::object();
+  const nlohmann::json final_parameters =
+      ParametersWithStdJson(r.final.result.parameters, r.final.result.identifiability);
+  for (const std::string& e : r.added) {
+    for (auto it = final_parameters.begin(); it != final_parameters.end(); ++it) {
+      if (it.key().rfind(e + ".", 0) == 0) added_parameters[it.key()] = it.value();
+    }
+  }
+  return {{"baseline", SnapshotJson(r.baseline, has_validation)},
+          {"candidates", candidates},
+          {"added", r.added},
+          {"added_parameters", added_parameters},
+          {"final", SnapshotJson(r.final, has_validation)},
+          {"unexplained", unexplained},
+          {"settings",
+           {{"alpha", options.alpha},
+            {"correction", "Holm over the candidates tested in each round"},
+            {"candidate_test",
+             "F-test of nested models: joint refit with the candidate, noise weights of the "
+             "current fit held fixed"},
+            {"whiteness_test", "Ljung-Box, chi-square p-value by the regularized incomplete gamma"},
+            {"ljung_box_lags", options.residuals.lags},
+            {"unexplained_rms_ratio", options.unexplained_rms_ratio},
+            {"prediction_window_s", options.window_s}}},
+          {"seconds", r.seconds}};
+}
+
+}  // namespace coaxid

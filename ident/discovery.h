@@ -1,0 +1,76 @@
+// The closing loop (../shared/spec/effects.md, issue 6): fit the declared
+// model, analyse its residuals, score every library effect it lacks, add the
+// best one that passes a corrected test, refit everything jointly, and repeat
+// until none passes. A channel whose residual stays structured (Ljung-Box p
+// below alpha and rms clearly above its sample-to-sample noise) with no
+// candidate left to explain it is reported as unexplained, with what it
+// correlates with. Never adds a candidate that does not pass.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "dynamics/vehicle.h"
+#include "ident/candidate_scores.h"
+#include "ident/estimation_log.h"
+#include "ident/output_error.h"
+#include "ident/residual_analysis.h"
+
+namespace coaxid {
+
+struct DiscoveryOptions {
+  double alpha = 0.01;         // family-wise significance per round (Holm over candidates)
+  int max_added = 4;           // at most this many effects added
+  double window_s = 1.0;       // flight prediction window of the validation errors [s]
+  // A structured channel is "unexplained" when its rms exceeds this many
+  // times its sample-to-sample noise estimate.
+  double unexplained_rms_ratio = 1.5;
+  ResidualAnalysisOptions residuals;
+  OutputErrorOptions fit;
+  std::function<void(const std::string&)> progress;  // progress lines; nullptr: none
+  bool IsValid(std::string* why) const;
+};
+
+// A fitted model and how well it fits.
+struct ModelSnapshot {
+  Vehicle vehicle;                         // with the estimates
+  OutputErrorResult result;
+  std::map<std::string, FitError> fit, validation;
+  std::vector<Eigen::MatrixXd> validation_predictions;
+  std::vector<ChannelResidualTest> residual_tests, validation_residual_tests;
+};
+
+struct UnexplainedChannel {
+  std::string channel;
+  double ljung_box_p = 1, rms = 0, noise_std = 0;
+  std::string correlates_with;
+  double correlation = 0;
+  std::string why;
+};
+
+struct DiscoveryResult {
+  ModelSnapshot baseline, final;
+  std::vector<CandidateScore> candidates;  // every round's scores, round by round
+  std::vector<std::string> added;
+  std::vector<UnexplainedChannel> unexplained;
+  double seconds = 0;
+};
+
+// Throws InputError on invalid options or unusable logs; ComputationError if
+// the declared model's fit fails.
+DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLog>& estimation,
+                         const std::vector<EstimationLog>& validation,
+                         const DiscoveryOptions& options);
+
+// discovery.json of cli-and-reports.md.
+nlohmann::json DiscoveryJson(const DiscoveryResult& result, const DiscoveryOptions& options);
+
+// {"name": {"value", "std", "estimated"}} for every parameter.
+nlohmann::json ParametersWithStdJson(const ParameterSet& parameters,
+                                     const IdentifiabilityReport& identifiability);
+
+}  // namespace coaxid

@@ -1,0 +1,196 @@
+// The closing loop (ident/discovery.h) on simulated balance logs, whose static
+// model fits in milliseconds: an undeclared library effect in the truth is
+// found and only it; no undeclared effect, nothing is added (over seeds); an
+// effect outside the library is not mistaken for one and its channel is
+// reported as unexplained. Plus the p-value functions against closed forms.
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "dynamics/outputs.h"
+#include "experiments/scenario.h"
+#include "experiments/simulate_experiment.h"
+#include "ident/discovery.h"
+#include "ident/residual_analysis.h"
+
+namespace coaxid {
+namespace {
+
+using Effects = std::vector<std::pair<std::string, std::map<std::string, ParameterOverride>>>;
+
+Vehicle Nominal() { return LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml"); }
+
+// The shipped flight scenario's off-nominal truth parameters, with `effects`.
+Vehicle Truth(const Effects& effects) {
+  Scenario s = LoadScenario(std::string(COAXID_SOURCE_DIR) + "/configs/scenarios/flight.yaml");
+  s.truth_effects = effects;
+  return MakeTruthVehicle(Nominal().config, s);
+}
+
+ParameterOverride Value(double v) {
+  ParameterOverride o;
+  o.value = v;
+  return o;
+}
+
+Log BalanceLog(const Vehicle& truth, uint64_t seed) {
+  BalanceScenario b;  // the default staircase, short holds
+  b.hold_s = 0.5;
+  b.rate_hz = 50;
+  return SimulateBalance(truth, b, seed);
+}
+
+DiscoveryOptions Options() {
+  DiscoveryOptions o;
+  o.alpha = 0.01;
+  o.fit.num_threads = 2;
+  return o;
+}
+
+DiscoveryResult DiscoverOn(const Log& estimation, const Log& validation) {
+  return Discover(Nominal(), {MakeEstimationLog(estimation)}, {MakeEstimationLog(validation)},
+                  Options());
+}
+
+void ExpectWithinThreeStd(const DiscoveryResult& r, const Vehicle& truth, const std::string& name) {
+  const ParameterSet& p = r.final.result.parameters;
+  const IdentifiabilityReport& id = r.final.result.identifiability;
+  for (size_t k = 0; k < id.names.size(); ++k) {
+    if (id.names[k] != name) continue;
+    ASSERT_TRUE(id.identifiable[k]) << name;
+    // 3 std: a 0.3 % two-sided miss per parameter for a consistent estimator.
+    EXPECT_NEAR(p.Value(name), truth.parameters.Value(name), 3 * id.std[k]) << name;
+    return;
+  }
+  ADD_FAILURE() << name << " not estimated";
+}
+
+TEST(DiscoverStatistics, PValuesMatchClosedForms) {
+  // chi2 with 2 dof: survival exp(-x / 2).
+  EXPECT_NEAR(ChiSquareSurvival(3.0, 2), std::exp(-1.5), 1e-12);
+  EXPECT_NEAR(ChiSquareSurvival(40.0, 2), std::exp(-20.0), 1e-20);
+  // chi2 with 1 dof at 3.841459: 0.05 (tables).
+  EXPECT_NEAR(ChiSquareSurvival(3.841459, 1), 0.05, 1e-6);
+  // F(2, d2) survival: (1 + 2 f / d2)^(-d2 / 2).
+  EXPECT_NEAR(FSurvival(3.0, 2, 50), std::pow(1 + 2 * 3.0 / 50, -25.0), 1e-12);
+  // F(1, 10) at 4.964603: 0.05 (tables).
+  EXPECT_NEAR(FSurvival(4.964603, 1, 10), 0.05, 1e-6);
+}
+
+TEST(DiscoverResiduals, WhiteNoiseIsWhiteAndAStepIsNot) {
+  EstimationLog log = MakeEstimationLog(BalanceLog(Truth({}), 3));
+  std::vector<Eigen::MatrixXd> model = {log.values};
+  // model = measured minus white noise: residual = noise; Ljung-Box p roughly uniform.
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0, 1);
+  for (int k = 0; k < log.NumRows(); ++k) {
+    for (int c = 0; c < log.NumChannels(); ++c) model[0](k, c) -= noise(rng) * 0.01;
+  }
+  const auto white = AnalyseResiduals({log}, model);
+  int rejected = 0;
+  for (const ChannelResidualTest& t : white) {
+    rejected += t.ljung_box_p < 0.01;
+    EXPECT_NEAR(t.noise_std, 0.01, 0.002) << t.channel;  // robust estimate, 3600 samples
+  }
+  EXPECT_LE(rejected, 1);
+  // A residual that follows omega1 (hold-wise constant): structured, correlated with omega1.
+  const int z = log.ChannelColumn(kBalanceZ);
+  for (int k = 0; k < log.NumRows(); ++k) model[0](k, z) -= 1e-3 * log.inputs.input(k)[0];
+  for (const ChannelResidualTest& t : AnalyseResiduals({log}, model)) {
+    if (t.channel != "Z") continue;
+    EXPECT_LT(t.ljung_box_p, 1e-10);
+    ASSERT_FALSE(t.correlations.empty());
+    EXPECT_EQ(t.correlations.front().with, "omega1");
+  }
+}
+
+TEST(Discover, FindsWakeInterferenceAndOnlyIt) {
+  const Vehicle truth = Truth({{"wake_interference", {{"k_T", Value(5e-6)}, {"k_Q", Value(1e-7)}}}});
+  const DiscoveryResult r = DiscoverOn(BalanceLog(truth, 11), BalanceLog(truth, 12));
+  ASSERT_EQ(r.added, std::vector<std::string>{"wake_interference"});
+  for (const auto& [n, e] : r.baseline.validation) std::printf("DBG %s %g %g | fit %g %g\n", n.c_str(), e.rms, r.final.validation.at(n).rms, r.baseline.fit.at(n).rms, r.final.fit.at(n).rms);
+  for (const char* n : {"alpha","beta","sigma0","gamma1","gamma2","Cz","d"}) std::printf("DBG %s truth %g base %g final %g\n", n, truth.parameters.Value(n), r.baseline.result.parameters.Value(n), r.final.result.parameters.Value(n));
+  for (const auto& c : r.candidates) std::printf("DBG cand %d %s F=%g p=%g\n", c.round, c.effect.c_str(), c.statistic, c.p_value);
+  for (const char* channel : {"Z", "N"}) {
+    // "Clearly": the validation error at least halves.
+    EXPECT_LT(r.final.validation.at(channel).nrmse, 0.5 * r.baseline.validation.at(channel).nrmse)
+        << channel;
+  }
+  ExpectWithinThreeStd(r, truth, "wake_interference.k_T");
+  ExpectWithinThreeStd(r, truth, "wake_interference.k_Q");
+  EXPECT_TRUE(r.unexplained.empty());
+}
+
+TEST(Discover, FindsCgOffset) {
+  const Vehicle truth = Truth({{"cg_offset", {{"x_g", Value(4e-3)}, {"y_g", Value(-3e-3)}}}});
+  const DiscoveryResult r = DiscoverOn(BalanceLog(truth, 21), BalanceLog(truth, 22));
+  ASSERT_EQ(r.added, std::vector<std::string>{"cg_offset"});
+  for (const char* channel : {"L", "M"}) {
+    EXPECT_LT(r.final.validation.at(channel).nrmse, 0.5 * r.baseline.validation.at(channel).nrmse)
+        << channel;
+  }
+  ExpectWithinThreeStd(r, truth, "cg_offset.x_g");
+  ExpectWithinThreeStd(r, truth, "cg_offset.y_g");
+}
+
+TEST(Discover, TwoEffectsAreBothFound) {
+  const Vehicle truth = Truth({{"wake_interference", {{"k_T", Value(5e-6)}, {"k_Q", Value(1e-7)}}},
+                               {"cg_offset", {{"x_g", Value(4e-3)}, {"y_g", Value(-3e-3)}}}});
+  const DiscoveryResult r = DiscoverOn(BalanceLog(truth, 31), BalanceLog(truth, 32));
+  std::vector<std::string> added = r.added;
+  std::sort(added.begin(), added.end());
+  EXPECT_EQ(added, (std::vector<std::string>{"cg_offset", "wake_interference"}));
+}
+
+TEST(Discover, NothingAddedWithoutAnUndeclaredEffect) {
+  const Vehicle truth = Truth({});
+  // Each run tests the candidates at family-wise alpha = 0.01: over 10 seeds
+  // the expected number of false alarms is 0.1; two or more has probability
+  // below 0.5 %.
+  int false_alarms = 0, unexplained = 0;
+  for (uint64_t seed = 100; seed < 110; ++seed) {
+    const DiscoveryResult r = DiscoverOn(BalanceLog(truth, seed), BalanceLog(truth, seed + 1000));
+    false_alarms += !r.added.empty();
+    unexplained += !r.unexplained.empty();
+  }
+  EXPECT_LE(false_alarms, 1);
+  EXPECT_LE(unexplained, 1);
+}
+
+TEST(Discover, EffectOutsideTheLibraryIsReportedUnexplained) {
+  // A yaw torque that follows the lower swashplate angle, N += c sin(delta_cx)
+  // omega2^2, which no library effect has, written into the logs only.
+  const Vehicle truth = Truth({});
+  auto with_torque = [](Log log) {
+    std::vector<double> n = log.Column("N");
+    const std::vector<double>& dx = log.Column("delta_cx");
+    const std::vector<double>& w2 = log.Column("omega2");
+    for (size_t k = 0; k < n.size(); ++k) n[k] += 6e-7 * std::sin(dx[k]) * w2[k] * w2[k];
+    log.SetColumn("N", n);
+    return log;
+  };
+  const DiscoveryResult r =
+      DiscoverOn(with_torque(BalanceLog(truth, 41)), with_torque(BalanceLog(truth, 42)));
+  EXPECT_TRUE(r.added.empty()) << "added " << (r.added.empty() ? "" : r.added.front());
+  bool n_unexplained = false;
+  for (const UnexplainedChannel& u : r.unexplained) {
+    if (u.channel == "N") {
+      n_unexplained = true;
+      EXPECT_EQ(u.correlates_with, "delta_cx") << u.why;
+    }
+  }
+  EXPECT_TRUE(n_unexplained);
+  const nlohmann::json j = DiscoveryJson(r, Options());
+  for (const char* key : {"baseline", "candidates", "added", "final", "unexplained"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_TRUE(j["baseline"]["residual_tests"]["N"].contains("ljung_box_p"));
+  EXPECT_TRUE(j["candidates"][0].contains("p_value"));
+}
+
+}  // namespace
+}  // namespace coaxid
