@@ -23,6 +23,9 @@ DEFINE_double(segment_s, 1.0,
 DEFINE_int32(noise_relaxations, 2,
              "output_error: re-estimate the noise from the residuals and refit this many times");
 DEFINE_double(huber, 0.0, "output_error: Huber loss threshold in noise std (0: least squares)");
+DEFINE_string(noise_std, "",
+              "output_error: given output noise std per channel, e.g. phi:0.003,p:0.01,Z:0.02 "
+              "(the others are estimated from the data); with --noise_relaxations=0 they are kept");
 DEFINE_string(start, "config",
               "output_error: starting values: config, or linear_kf (the paper's baseline on the "
               "balance logs)");
@@ -200,6 +203,24 @@ int RunIdentifyOutputError() {
   options.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
   std::string why;
   if (!options.IsValid(&why)) throw InputError("output_error options: " + why);
+  if (!FLAGS_noise_std.empty()) {
+    options.noise = NoiseFromData(split.estimation);
+    for (const std::string& item : SplitList(FLAGS_noise_std)) {
+      const size_t colon = item.find(':');
+      char* end = nullptr;
+      const double value =
+          colon == std::string::npos ? NAN : std::strtod(item.c_str() + colon + 1, &end);
+      if (colon == std::string::npos || end == item.c_str() + colon + 1 || *end != '\0' ||
+          !(value > 0) || !std::isfinite(value)) {
+        throw InputError("--noise_std: '" + item + "' is not CHANNEL:STD with STD > 0");
+      }
+      const std::string channel = item.substr(0, colon);
+      if (!options.noise.std.count(channel)) {
+        throw InputError("--noise_std: no channel '" + channel + "' in the estimation logs");
+      }
+      options.noise.std[channel] = value;
+    }
+  }
 
   std::vector<std::string> notes = {"Validation data: " + split.description + "."};
   if (FLAGS_start == "linear_kf") notes.push_back(StartFromBaseline(logs, &vehicle));

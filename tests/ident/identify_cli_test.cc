@@ -178,8 +178,6 @@ TEST_F(IdentifyCliTest, BadInputExitsTwoAndWritesNothing) {
   } cases[] = {
       {Identify(flight, out), "balance logs only"},
       {Identify(log, out, "--validate=" + flight), "balance logs only"},
-      {"identify --method=ekf --logs=" + log + " --config=" + config_ + " --out=" + out,
-       "method 'ekf' is not available yet (linear_kf only)"},
       {"identify --method=magic --logs=" + log + " --config=" + config_ + " --out=" + out,
        "unknown method 'magic'"},
       {"identify --logs=" + log + " --config=" + config_ + " --out=" + out, "missing --method"},
