@@ -161,9 +161,12 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
     std::vector<double> channel_std;
     for (const std::string& name : log.channel_names) channel_std.push_back(noise.For(name));
     if (log.kind == LogKind::kBalance) {
-      for (int first = 0; first < log.NumRows(); first += options.balance_rows_per_block) {
-        const int end = std::min(log.NumRows(), first + options.balance_rows_per_block);
+      for (int first = 0; first < log.NumRows();) {
+        int end = std::min(log.NumRows(), first + options.balance_rows_per_block);
+        // Blocks end at a hold boundary, so no hold is split between two.
+        while (end < log.NumRows() && log.inputs.input(end) == log.inputs.input(end - 1)) ++end;
         auto* cost = new BalanceRowsCost(vehicle.model, free, log, first, end, channel_std);
+        first = end;
         if (cost->num_residuals() == 0) {
           delete cost;
           continue;

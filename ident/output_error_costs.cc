@@ -161,13 +161,22 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
 BalanceRowsCost::BalanceRowsCost(const VehicleModel& model, const FreeParameters& free,
                                  const EstimationLog& log, int first, int end,
                                  const std::vector<double>& channel_std)
-    : model_(model), free_(free), log_(log), first_(first), end_(end) {
-  for (int k = first; k < end; ++k) {
+    : model_(model), free_(free), log_(log) {
+  for (int a = first; a < end;) {
+    int b = a + 1;
+    while (b < end && log.inputs.input(b) == log.inputs.input(a)) ++b;
     for (int c = 0; c < log.NumChannels(); ++c) {
-      if (std::isfinite(log.values(k, c))) {
-        terms_.push_back({k, c, log.channels[c], 1.0 / channel_std[c]});
+      double sum = 0;
+      int n = 0;
+      for (int k = a; k < b; ++k) {
+        if (std::isfinite(log.values(k, c))) {
+          sum += log.values(k, c);
+          ++n;
+        }
       }
+      if (n > 0) terms_.push_back({a, log.channels[c], std::sqrt(n) / channel_std[c], sum / n});
     }
+    a = b;
   }
   set_num_residuals(static_cast<int>(terms_.size()));
   mutable_parameter_block_sizes()->push_back(free.size());
@@ -192,7 +201,7 @@ bool BalanceRowsCost::Evaluate(double const* const* parameters, double* residual
         return false;
       }
     }
-    residuals[term] = t.weight * (y[t.channel] - log_.values(t.row, t.column));
+    residuals[term] = t.weight * (y[t.channel] - t.mean);
     if (want) J.row(term) = t.weight * dydp.row(t.channel).cwiseProduct(free_.scales().transpose());
   }
   return true;

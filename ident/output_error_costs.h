@@ -12,7 +12,12 @@
 //
 // BalanceRowsCost, a chunk of balance-log rows, parameter block (theta_scaled):
 //   r(k, c) = (h_c(u_k, theta) - y(k, c)) / std_c
-// with h the balance output model and its autodiff Jacobian.
+// with h the balance output model and its autodiff Jacobian. Consecutive rows
+// with identical inputs (a constant-input hold) have the same model output,
+// so their squared residuals sum to n_c (h_c - mean_c)^2 / std_c^2 plus a
+// constant: each hold enters as one residual sqrt(n_c) (h_c - mean_c) / std_c
+// per channel, which gives the same estimates and Fisher information with a
+// hold's worth fewer evaluations.
 //
 // Both return false (Ceres rejects the step) when the model cannot be
 // evaluated: CVODE failure, non-finite values.
@@ -80,13 +85,13 @@ class BalanceRowsCost : public ceres::CostFunction {
 
  private:
   struct Term {
-    int row, column, channel;
-    double weight;
+    int row, channel;  // a row of the hold (its inputs), the BalanceChannel
+    double weight;     // sqrt(n) / std
+    double mean;       // mean of the hold's finite values of the channel
   };
   const VehicleModel& model_;
   const FreeParameters& free_;
   const EstimationLog& log_;
-  int first_, end_;
   std::vector<Term> terms_;
 };
 
