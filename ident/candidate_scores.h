@@ -16,6 +16,7 @@
 // conservatively).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,7 @@ Vehicle CandidateVehicle(const Vehicle& vehicle, const std::string& effect);
 std::vector<CandidateScore> ScoreCandidates(const Vehicle& vehicle, const OutputErrorResult& fit,
                                             const std::vector<EstimationLog>& logs,
                                             const OutputErrorOptions& fit_options, double alpha,
-                                            int round);
+                                            int round,
+                                            const std::function<void(const std::string&)>& progress = nullptr);
 
 }  // namespace coaxid

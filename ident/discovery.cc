@@ -131,7 +131,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                                         : "the model with " + std::to_string(out.added.size()) +
                                               " added effect(s)"));
     std::vector<CandidateScore> scores =
-        ScoreCandidates(current, fit, estimation, options.fit, options.alpha, round);
+        ScoreCandidates(current, fit, estimation, options.fit, options.alpha, round, options.progress);
     for (const CandidateScore& s : scores) {
       char line[256];
       std::snprintf(line, sizeof(line), "  %-18s F = %-10.4g p = %-10.3g p_holm = %-10.3g %s",

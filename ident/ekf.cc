@@ -222,7 +222,7 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
   Eigen::VectorXd z_pred(n);
   Eigen::MatrixXd P_pred(n, n), Phi = Eigen::MatrixXd::Identity(n, n);
   EkfTransition transition;
-  Eigen::MatrixXd H, HP, S, K, THt, T(n, n);
+  Eigen::MatrixXd H, HP, PHt, S, K, THt, T(n, n);
   Eigen::VectorXd nu, r_diag;
   Eigen::Matrix<double, kNumFlightChannels, 1> y_hat;
   Eigen::Matrix<double, 3, Eigen::Dynamic> H_acc;
@@ -321,13 +321,13 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
         const auto Pxp = P.topRightCorner(kNumStates, np);
         const auto Ppp = P.bottomRightCorner(np, np);
         StateMatrix M = A * Pxx;
-        StateByParameter Nxp = A * Pxp;
+        StateByParameter Nxp = A.lazyProduct(Pxp);
         if (np > 0) {
-          M.noalias() += B * Pxp.transpose();
-          Nxp.noalias() += B * Ppp;
+          M.noalias() += B.lazyProduct(Pxp.transpose());
+          Nxp.noalias() += B.lazyProduct(Ppp);
         }
         StateMatrix Pxx_new = M * A.transpose() + transition.Qxx;
-        if (np > 0) Pxx_new.noalias() += Nxp * B.transpose();
+        if (np > 0) Pxx_new.noalias() += Nxp.lazyProduct(B.transpose());
         P_pred.topLeftCorner<kNumStates, kNumStates>() = 0.5 * (Pxx_new + Pxx_new.transpose());
         P_pred.topRightCorner(kNumStates, np) = Nxp + transition.Qxp;
         P_pred.bottomLeftCorner(np, kNumStates) = P_pred.topRightCorner(kNumStates, np).transpose();
@@ -380,8 +380,22 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
             H.row(j) = H_acc.row(channel - kAx);
           }
         }
-        HP.noalias() = H * P;  // m x n; P H^T = HP^T (P symmetric)
-        S.noalias() = HP * H.transpose();
+        // H is sparse: a state channel's row is a unit vector. X H^T takes
+        // columns of X for those, a product only for accelerometer rows.
+        auto times_Ht = [&](const Eigen::MatrixXd& X, Eigen::MatrixXd* out) {
+          out->resize(X.rows(), m);
+          for (int j = 0; j < m; ++j) {
+            const int channel = log.channels[present[j]];
+            if (channel < kNumStates) {
+              out->col(j) = X.col(channel);
+            } else {
+              out->col(j).noalias() = X * H.row(j).transpose();
+            }
+          }
+        };
+        times_Ht(P, &PHt);
+        HP = PHt.transpose();  // m x n (P symmetric)
+        times_Ht(HP, &S);
         S.diagonal() += r_diag;
         for (int j = 0; j < m; ++j) S(j, j) = std::max(S(j, j), r_diag[j]);  // floor
         llt.compute(S);
@@ -400,7 +414,7 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
         // matrix in O(n^2 m) instead of O(n^3).
         T = P;
         T.noalias() -= K * HP;
-        THt.noalias() = T * H.transpose();
+        times_Ht(T, &THt);
         THt.noalias() -= K * r_diag.asDiagonal();
         P = T;
         P.noalias() -= THt * K.transpose();
@@ -584,9 +598,8 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   // The parameter set of the passes: the anchor's `estimated` flag applied.
   Vehicle anchored = vehicle;
   anchored.parameters = result.parameters;
-  Problem problem{anchored, logs, noise, options, free};
-  problem.lower = free.ScaledLower();
-  problem.upper = free.ScaledUpper();
+  Problem problem{anchored, logs, noise, options, free, free.ScaledLower(), free.ScaledUpper(),
+                  Eigen::VectorXd(), Eigen::MatrixXd(), Eigen::Matrix<double, kNumStates, 1>()};
   const Eigen::VectorXd p0 = free.ScaledValues();
   for (int k = 0; k < np; ++k) {
     if (!(p0[k] >= problem.lower[k] && p0[k] <= problem.upper[k])) {
@@ -722,6 +735,11 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
            ? "; std from a second pass linearised at that estimate (covariance pass)"
            : "; std from the filter");
   result.clamped = pass1.clamped;
+  if (result.clamped > 0) {
+    result.notes.push_back("The estimation pass projected parameters back onto their bounds " +
+                           std::to_string(result.clamped) +
+                           " times: check the final values against the config's bounds.");
+  }
   result.log_likelihood = pass1.log_likelihood;
   result.rows = rows_per_pass;
 

@@ -21,21 +21,72 @@ constexpr double kMaxScaledNorm = 0.25;
 void Compose(const StateMatrix& a, const StateByParameter& b, const StateMatrix& qxx,
              const StateByParameter& qxp, const Eigen::VectorXd& qpp_acc, EkfTransition* acc) {
   // Qd first (it needs the old blocks).
-  const StateByParameter AQxp = a * acc->Qxp;   // 12 x np
+  const StateByParameter AQxp = a.lazyProduct(acc->Qxp);  // 12 x np
   StateMatrix Qxx = a * acc->Qxx * a.transpose();
   if (b.cols() > 0) {
-    const StateMatrix cross = AQxp * b.transpose();
+    const StateMatrix cross = AQxp.lazyProduct(b.transpose());
     Qxx += cross + cross.transpose();
-    Qxx.noalias() += b * qpp_acc.asDiagonal() * b.transpose();
+    Qxx.noalias() += (b * qpp_acc.asDiagonal()).lazyProduct(b.transpose());
   }
   acc->Qxx = Qxx + qxx;
   acc->Qxp = AQxp + b * qpp_acc.asDiagonal();
   acc->Qxp += qxp;
-  acc->B = a * acc->B + b;
+  acc->B = (a.lazyProduct(acc->B) + b).eval();  // lazy products do not guard aliasing
   acc->A = a * acc->A;
 }
 
 }  // namespace
+
+void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
+                         const Eigen::Matrix<double, kNumStates, 1>& qx, const Eigen::VectorXd& qp,
+                         double h, EkfTransition* out) {
+  const int np = static_cast<int>(G.cols());
+  const double norm = (F * h).cwiseAbs().colwise().sum().maxCoeff();
+  int squarings = 0;
+  if (norm > kMaxScaledNorm) squarings = static_cast<int>(std::ceil(std::log2(norm / kMaxScaledNorm)));
+  const double hs = std::ldexp(h, -squarings);
+  // exp([[F, G], [0, 0]] hs) = [[exp(X), hs phi1(X) G], [0, I]], X = F hs,
+  // phi1(X) = I + X/2! + X^2/3! + ... (Horner, to X^5).
+  const StateMatrix X = F * hs;
+  const StateMatrix I = StateMatrix::Identity();
+  const StateMatrix phi1 = I + X / 2 * (I + X / 3 * (I + X / 4 * (I + X / 5 * (I + X / 6))));
+  StateMatrix A = I + X * phi1;
+  StateByParameter B = hs * phi1.lazyProduct(G);
+  // Qd over hs (series in the header comment): with X = F,
+  //   Qx part: sum_k hs^(k+1)/(k+1)! sum_{i+j=k} C(k,i) F^i qx F^T^j,  k = 0..3,
+  //   M part:  sum_{i,j} hs^(i+j+3) / ((i+j+3) (i+1)! (j+1)!) F^i M F^T^j,  i+j <= 2,
+  //   Qxp:     sum_i hs^(i+2)/(i+2)! F^i G qp,  i = 0..3.
+  const double h2 = hs * hs, h3 = h2 * hs, h4 = h3 * hs, h5 = h4 * hs;
+  const StateMatrix FQ = F * qx.asDiagonal();
+  const StateMatrix F2Q = F * FQ, F3Q = F * F2Q;
+  const StateMatrix FQFt = FQ * F.transpose(), F2QFt = F2Q * F.transpose();
+  StateMatrix Qxx = StateMatrix(qx.asDiagonal()) * hs;
+  Qxx += (FQ + FQ.transpose()) * (h2 / 2);
+  Qxx += (F2Q + F2Q.transpose() + 2 * FQFt) * (h3 / 6);
+  Qxx += (F3Q + F3Q.transpose() + 3 * (F2QFt + F2QFt.transpose())) * (h4 / 24);
+  StateByParameter Qxp(kNumStates, np);
+  if (np > 0) {
+    const StateByParameter Gq = G * qp.asDiagonal();
+    const StateMatrix M = Gq.lazyProduct(G.transpose());
+    const StateMatrix FM = F * M;
+    const StateMatrix F2M = F * FM;
+    Qxx += M * (h3 / 3) + (FM + FM.transpose()) * (h4 / 8);
+    Qxx += FM * F.transpose() * (h5 / 20) + (F2M + F2M.transpose()) * (h5 / 30);
+    const StateByParameter FGq = F.lazyProduct(Gq), F2Gq = F.lazyProduct(FGq);
+    Qxp = (h2 / 2) * Gq + (h3 / 6) * FGq + (h4 / 24) * F2Gq + (h5 / 120) * F.lazyProduct(F2Gq);
+  }
+  out->A = A;
+  out->B = B;
+  out->Qxx = 0.5 * (Qxx + Qxx.transpose());
+  out->Qxp = Qxp;
+  // Squaring: the transition over 2 hs is this one twice.
+  Eigen::VectorXd qpp = hs * qp;
+  for (int s = 0; s < squarings; ++s) {
+    const EkfTransition half = *out;
+    Compose(half.A, half.B, half.Qxx, half.Qxp, qpp, out);
+    qpp *= 2;
+  }
+}
 
 const char* EkfTransitionMethodName(EkfTransitionMethod method) {
   return method == EkfTransitionMethod::kLinearised ? "linearised" : "sensitivities";
@@ -85,35 +136,18 @@ bool EkfPropagator::Fail(const std::string& why) {
   return false;
 }
 
-bool EkfPropagator::LinearisedStep(double h, const State& x_a, const State& x_b,
-                                   const InputVector& u, StateMatrix* A, StateByParameter* B) {
+bool EkfPropagator::MidpointJacobian(const State& x_a, const State& x_b, const InputVector& u,
+                                     StateMatrix* F, StateByParameter* G) {
   const State x_mid = 0.5 * (x_a + x_b);
   ++counters_.jacobians;
+  const int np = num_parameters();
   if (!DerivativeJacobians(model_, theta_, x_mid.data(), u, free_indices_, &dfdx_,
-                           num_parameters() > 0 ? &dfdp_ : nullptr)) {
+                           np > 0 ? &dfdp_ : nullptr)) {
     return Fail("model Jacobian not finite");
   }
-  const StateMatrix F = dfdx_;
-  const int np = num_parameters();
-  StateByParameter G(kNumStates, np);
-  if (np > 0) G = dfdp_ * dtheta_dp_.asDiagonal();
-
-  // exp([[F h, G h], [0, 0]]) = [[exp(X), h phi1(X) G], [0, I]], X = F h,
-  // phi1(X) = I + X/2! + X^2/3! + ... (Horner), with scaling and squaring.
-  const double norm = (F * h).cwiseAbs().colwise().sum().maxCoeff();
-  int squarings = 0;
-  if (norm > kMaxScaledNorm) squarings = static_cast<int>(std::ceil(std::log2(norm / kMaxScaledNorm)));
-  const double hs = std::ldexp(h, -squarings);
-  const StateMatrix X = F * hs;
-  const StateMatrix I = StateMatrix::Identity();
-  const StateMatrix phi1 = I + X / 2 * (I + X / 3 * (I + X / 4 * (I + X / 5 * (I + X / 6))));
-  *A = I + X * phi1;
-  *B = hs * (phi1 * G);
-  for (int s = 0; s < squarings; ++s) {
-    // [[A, B], [0, I]]^2 = [[A^2, A B + B], [0, I]].
-    *B = (*A) * (*B) + *B;
-    *A = (*A) * (*A);
-  }
+  *F = dfdx_;
+  G->resize(kNumStates, np);
+  if (np > 0) *G = dfdp_ * dtheta_dp_.asDiagonal();
   return true;
 }
 
@@ -131,8 +165,9 @@ bool EkfPropagator::Propagate(double t0, double t1, const InputVector& u, const 
   Eigen::VectorXd qpp_acc = Eigen::VectorXd::Zero(np);
 
   State x_a = x0;
-  StateMatrix a;
-  StateByParameter b(kNumStates, np);
+  StateMatrix F;
+  StateByParameter G(kNumStates, np);
+  EkfTransition step;
   if (method_ == EkfTransitionMethod::kLinearised) {
     z_ = x0;
     if (!integrator_->Reset(t0, z_)) return Fail(integrator_->last_error());
@@ -147,7 +182,8 @@ bool EkfPropagator::Propagate(double t0, double t1, const InputVector& u, const 
       if (!integrator_->AdvanceTo(tb, &z_)) return Fail(integrator_->last_error());
       x_b = z_;
       if (!x_b.allFinite()) return Fail("state not finite");
-      if (!LinearisedStep(h, x_a, x_b, u, &a, &b)) return false;
+      if (!MidpointJacobian(x_a, x_b, u, &F, &G)) return false;
+      ZeroOrderTransition(F, G, state_psd_, parameter_psd_, h, &step);
     } else {
       // [x; vec([I | 0])], restarted at every sub-step so that each gives its own Phi_j.
       z_.setZero();
@@ -158,19 +194,14 @@ bool EkfPropagator::Propagate(double t0, double t1, const InputVector& u, const 
       }
       x_b = z_.head<kNumStates>();
       if (!z_.allFinite()) return Fail("state or sensitivities not finite");
+      if (!MidpointJacobian(x_a, x_b, u, &F, &G)) return false;
+      ZeroOrderTransition(F, G, state_psd_, parameter_psd_, h, &step);  // for Qd
       const Eigen::Map<const Eigen::MatrixXd> S(z_.data() + kNumStates, kNumStates,
                                                 kNumStates + np);
-      a = S.leftCols<kNumStates>();
-      if (np > 0) b = S.rightCols(np) * dtheta_dp_.asDiagonal();
+      step.A = S.leftCols<kNumStates>();
+      if (np > 0) step.B = S.rightCols(np) * dtheta_dp_.asDiagonal();
     }
-    // Trapezoidal Qd of this sub-step: h/2 (Phi Qc Phi^T + Qc).
-    StateMatrix qxx = a * state_psd_.asDiagonal() * a.transpose();
-    if (np > 0) qxx.noalias() += b * parameter_psd_.asDiagonal() * b.transpose();
-    qxx.diagonal() += state_psd_;
-    qxx *= 0.5 * h;
-    StateByParameter qxp(kNumStates, np);
-    if (np > 0) qxp = (0.5 * h) * (b * parameter_psd_.asDiagonal());
-    Compose(a, b, qxx, qxp, qpp_acc, out);
+    Compose(step.A, step.B, step.Qxx, step.Qxp, qpp_acc, out);
     qpp_acc += h * parameter_psd_;
     x_a = x_b;
   }

