@@ -92,7 +92,8 @@ int Check() {
 
 // The logs the demo simulates and the project ships (data/glmav/NAME.csv),
 // each from configs/scenarios/NAME.yaml with configs/glmav.yaml.
-const char* const kDemoScenarios[] = {"balance", "balance_points", "flight", "flight_3211"};
+const char* const kDemoScenarios[] = {"balance", "balance_points", "flight", "flight_3211",
+                                      "balance_wake"};
 
 int Demo() {
   RequireFlag(FLAGS_out, "out");
@@ -223,6 +224,43 @@ int Demo() {
       "beta and Cz_beta (its report says so); output_error estimates everything jointly from "
       "the flight and balance logs.\n";
   report["estimates"] = estimates;
+
+  // The closing loop: a simulated log with an effect the config does not
+  // declare, and the measured coaxial test-stand data.
+  struct Discovery {
+    const char* name;
+    std::string logs, config, title;
+  };
+  const std::string real = root + "/data/real/tmotor28-coaxial/";
+  const Discovery discoveries[] = {
+      {"discover_simulated", root + "/data/glmav/balance_wake.csv", config_path,
+       "simulated balance log with an undeclared wake_interference (truth: k_T = 5e-6, "
+       "k_Q = 1e-7)"},
+      {"discover_tmotor28", real + "tmotor28_coaxial.csv," + real + "tmotor28_isolated.csv",
+       root + "/configs/tmotor28.yaml",
+       "measured T-motor 28\" coaxial test-stand data (pyBEMT, MIT licence), the paper's "
+       "model with one sigma"}};
+  markdown += "\n## The closing loop (`coaxid discover`)\n\n";
+  nlohmann::json discovery_summary = nlohmann::json::object();
+  for (const Discovery& d : discoveries) {
+    std::fprintf(stderr, "demo: discover on the %s (elapsed %.1f s)\n", d.title.c_str(),
+                 Seconds(start));
+    const std::string out = FLAGS_out;
+    FLAGS_logs = d.logs;
+    FLAGS_config = d.config;
+    FLAGS_out = out + "/" + d.name;
+    const int status = RunDiscover();
+    FLAGS_out = out;
+    if (status != 0) return status;
+    const nlohmann::json r =
+        nlohmann::json::parse(ReadFile(out + "/" + d.name + "/discovery.json"));
+    discovery_summary[d.name] = {{"added", r["added"]}, {"unexplained", r["unexplained"]}};
+    std::string added;
+    for (const auto& a : r["added"]) added += (added.empty() ? "" : ", ") + a.get<std::string>();
+    markdown += "- " + d.title + ": added **" + (added.empty() ? "nothing" : added) +
+                "**; the full report is `" + d.name + "/report.md`.\n";
+  }
+  report["discoveries"] = discovery_summary;
   WriteFileAtomically(FLAGS_out + "/summary.md", markdown);
   WriteJson(FLAGS_out + "/summary.json", report);
   std::fprintf(stderr, "demo: done in %.1f s; read %s/summary.md\n", Seconds(start),

@@ -18,8 +18,8 @@ struct WakeInterferenceEffect : EffectBase {
       "magnitude by k_Q omega1 omega2 (the paper has one sigma for both rotors, eq. 12)";
   static const std::vector<EffectParameterSpec>& Parameters() {
     static const std::vector<EffectParameterSpec> p = {
-        {"k_T", 0.0, 0.0, 5e-5, 5e-6, 5e-6, "N s^2"},
-        {"k_Q", 0.0, 0.0, 1e-5, 1e-7, 1e-7, "N m s^2"}};
+        {"k_T", 0.0, 0.0, 1e-2, 5e-6, 5e-6, "N s^2"},
+        {"k_Q", 0.0, 0.0, 1e-3, 1e-7, 1e-7, "N m s^2"}};
     return p;
   }
   template <typename T>
