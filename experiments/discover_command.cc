@@ -12,6 +12,7 @@
 #include "dynamics/effects/effect_library.h"
 #include "experiments/cli.h"
 #include "experiments/cli_flags.h"
+#include "experiments/estimation_io.h"
 #include "ident/balance_holds.h"
 #include "ident/discovery.h"
 
@@ -31,38 +32,6 @@ constexpr const char* kDiscoverUsage =
 
 void Require(const std::string& value, const char* flag) {
   if (value.empty()) throw InputError(std::string("missing --") + flag + "\n" + kDiscoverUsage);
-}
-
-struct Split {
-  std::vector<EstimationLog> estimation, validation;
-  std::string description;
-};
-
-Split SplitLogs(const std::vector<Log>& logs, const std::vector<Log>& validate) {
-  Split s;
-  if (!validate.empty()) {
-    for (const Log& log : logs) s.estimation.push_back(MakeEstimationLog(log));
-    for (const Log& log : validate) s.validation.push_back(MakeEstimationLog(log));
-    s.description = "the --validate logs, whole";
-    return s;
-  }
-  if (FLAGS_holdout_fraction <= 0) {
-    for (const Log& log : logs) s.estimation.push_back(MakeEstimationLog(log));
-    s.description = "none (--holdout_fraction=0 and no --validate)";
-    return s;
-  }
-  s.description = "the contiguous final part of each log (--holdout_fraction=" +
-                  std::to_string(FLAGS_holdout_fraction) + "):";
-  for (const Log& log : logs) {
-    const int cut = log.kind == LogKind::kBalance
-                        ? HoldoutStartRow(log, FLAGS_holdout_fraction)
-                        : HoldoutStart(log.NumRows(), FLAGS_holdout_fraction, log.source);
-    s.estimation.push_back(MakeEstimationLog(log, 0, cut));
-    s.validation.push_back(MakeEstimationLog(log, cut));
-    s.description += " " + log.source + " rows " + std::to_string(cut + 1) + "-" +
-                     std::to_string(log.NumRows());
-  }
-  return s;
 }
 
 std::string Num(double v, const char* fmt = "%.4g") {
@@ -271,7 +240,7 @@ int RunDiscover() {
   for (const std::string& path : SplitList(FLAGS_logs)) logs.push_back(ReadLog(path));
   for (const std::string& path : SplitList(FLAGS_validate)) validate.push_back(ReadLog(path));
   if (logs.empty()) throw InputError("--logs names no file");
-  const Split split = SplitLogs(logs, validate);
+  const LogSplit split = SplitEstimationAndValidation(logs, validate, FLAGS_holdout_fraction);
 
   const DiscoveryResult r = Discover(vehicle, split.estimation, split.validation, options);
 

@@ -14,6 +14,7 @@
 #include "dynamics/vehicle.h"
 #include "experiments/cli.h"
 #include "experiments/cli_flags.h"
+#include "experiments/estimation_io.h"
 #include "ident/balance_holds.h"
 #include "ident/linear_baseline.h"
 #include "ident/output_error.h"
@@ -49,39 +50,6 @@ void Require(const std::string& value, const char* flag) {
   }
 }
 
-// The estimation and held-out parts of every log.
-struct Split {
-  std::vector<EstimationLog> estimation, validation;
-  std::string description;
-};
-
-Split SplitLogs(const std::vector<Log>& logs, const std::vector<Log>& validate) {
-  Split s;
-  if (!validate.empty()) {
-    for (const Log& log : logs) s.estimation.push_back(MakeEstimationLog(log));
-    for (const Log& log : validate) s.validation.push_back(MakeEstimationLog(log));
-    s.description = "the --validate logs, whole";
-    return s;
-  }
-  if (FLAGS_holdout_fraction <= 0) {
-    for (const Log& log : logs) s.estimation.push_back(MakeEstimationLog(log));
-    s.description = "none (--holdout_fraction=0 and no --validate)";
-    return s;
-  }
-  s.description = "held out: the contiguous final part of each log (--holdout_fraction=" +
-                  std::to_string(FLAGS_holdout_fraction) + "):";
-  for (const Log& log : logs) {
-    const int cut = log.kind == LogKind::kBalance
-                        ? HoldoutStartRow(log, FLAGS_holdout_fraction)
-                        : HoldoutStart(log.NumRows(), FLAGS_holdout_fraction, log.source);
-    s.estimation.push_back(MakeEstimationLog(log, 0, cut));
-    s.validation.push_back(MakeEstimationLog(log, cut));
-    s.description += " " + log.source + " rows " + std::to_string(cut + 1) + "-" +
-                     std::to_string(log.NumRows());
-  }
-  return s;
-}
-
 // Starting values from the paper's linear baseline on the balance logs.
 std::string StartFromBaseline(const std::vector<Log>& logs, Vehicle* vehicle) {
   std::vector<BalanceData> balance;
@@ -105,50 +73,6 @@ std::string StartFromBaseline(const std::vector<Log>& logs, Vehicle* vehicle) {
   set("sigma0", r.thrust_map.sigma0);
   return "starting values of alpha, beta, gamma1, gamma2 and sigma0 from the linear_kf baseline "
          "on the balance logs; the others from the config";
-}
-
-std::string Csv(const EstimationLog& log, const Eigen::MatrixXd& model) {
-  std::ostringstream out;
-  out.precision(10);
-  out << "t";
-  for (const std::string& name : log.channel_names) out << "," << name << "," << name << "_model";
-  out << "\n";
-  for (int k = 0; k < log.NumRows(); ++k) {
-    out << log.inputs.time(k);
-    for (int c = 0; c < log.NumChannels(); ++c) {
-      out << ",";
-      if (std::isfinite(log.values(k, c))) out << log.values(k, c);
-      out << ",";
-      if (std::isfinite(model(k, c))) out << model(k, c);
-    }
-    out << "\n";
-  }
-  return out.str();
-}
-
-Figure MeasuredVersusModel(const std::string& title, const EstimationLog& log,
-                           const Eigen::MatrixXd& model) {
-  Figure f;
-  f.title = title;
-  f.columns = 3;
-  const bool balance = log.kind == LogKind::kBalance;
-  for (int c = 0; c < log.NumChannels(); ++c) {
-    PlotPanel panel;
-    panel.title = log.channel_names[c];
-    panel.x_label = balance ? "row" : "t [s]";
-    PlotSeries measured{"measured", {}, {}, balance ? "points pt 7 ps 0.3" : "lines lc rgb '#999999'"};
-    PlotSeries predicted{"model", {}, {}, balance ? "points pt 6 ps 0.4 lc rgb 'red'" : "lines lc rgb 'red'"};
-    for (int k = 0; k < log.NumRows(); ++k) {
-      const double x = balance ? k : log.inputs.time(k);
-      measured.x.push_back(x);
-      measured.y.push_back(log.values(k, c));
-      predicted.x.push_back(x);
-      predicted.y.push_back(model(k, c));
-    }
-    panel.series = {measured, predicted};
-    f.panels.push_back(panel);
-  }
-  return f;
 }
 
 nlohmann::json ParametersJson(const ParameterSet& estimates, const IdentifiabilityReport& id) {
@@ -193,7 +117,7 @@ int RunIdentifyOutputError() {
   for (const std::string& path : SplitList(FLAGS_logs)) logs.push_back(ReadLog(path));
   for (const std::string& path : SplitList(FLAGS_validate)) validate.push_back(ReadLog(path));
   if (logs.empty()) throw InputError("--logs names no file");
-  const Split split = SplitLogs(logs, validate);
+  const LogSplit split = SplitEstimationAndValidation(logs, validate, FLAGS_holdout_fraction);
 
   OutputErrorOptions options;
   options.segment_schedule_s = {std::min(0.25, FLAGS_segment_s), FLAGS_segment_s};
@@ -267,10 +191,10 @@ int RunIdentifyOutputError() {
                   const std::vector<Eigen::MatrixXd>& model) {
     for (size_t i = 0; i < set.size(); ++i) {
       const std::string name = unique(std::string(part) + "_" + set[i].name);
-      WriteFileAtomically(dir + "/" + name + ".csv", Csv(set[i], model[i]));
+      WriteFileAtomically(dir + "/" + name + ".csv", MeasuredVersusModelCsv(set[i], model[i]));
       files.push_back(name + ".csv");
       std::string error;
-      if (RenderFigure(MeasuredVersusModel(std::string(part) + ": " + set[i].source, set[i],
+      if (RenderFigure(MeasuredVersusModelFigure(std::string(part) + ": " + set[i].source, set[i],
                                            model[i]),
                        dir + "/plots/" + name + ".png", &error)) {
         plots.push_back("plots/" + name + ".png");

@@ -1,0 +1,84 @@
+#include "experiments/estimation_io.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "ident/balance_holds.h"
+
+namespace coaxid {
+
+LogSplit SplitEstimationAndValidation(const std::vector<Log>& logs,
+                                      const std::vector<Log>& validate, double holdout_fraction) {
+  LogSplit s;
+  if (!validate.empty()) {
+    for (const Log& log : logs) s.estimation.push_back(MakeEstimationLog(log));
+    for (const Log& log : validate) s.validation.push_back(MakeEstimationLog(log));
+    s.description = "the --validate logs, whole";
+    return s;
+  }
+  if (holdout_fraction <= 0) {
+    for (const Log& log : logs) s.estimation.push_back(MakeEstimationLog(log));
+    s.description = "none (--holdout_fraction=0 and no --validate)";
+    return s;
+  }
+  s.description = "the contiguous final part of each log (--holdout_fraction=" +
+                  std::to_string(holdout_fraction) + "):";
+  for (const Log& log : logs) {
+    const int cut = log.kind == LogKind::kBalance
+                        ? HoldoutStartRow(log, holdout_fraction)
+                        : HoldoutStart(log.NumRows(), holdout_fraction, log.source);
+    s.estimation.push_back(MakeEstimationLog(log, 0, cut));
+    s.validation.push_back(MakeEstimationLog(log, cut));
+    s.description += " " + log.source + " rows " + std::to_string(cut + 1) + "-" +
+                     std::to_string(log.NumRows());
+  }
+  return s;
+}
+
+std::string MeasuredVersusModelCsv(const EstimationLog& log, const Eigen::MatrixXd& model) {
+  std::ostringstream out;
+  out.precision(10);
+  out << "t";
+  for (const std::string& name : log.channel_names) out << "," << name << "," << name << "_model";
+  out << "\n";
+  for (int k = 0; k < log.NumRows(); ++k) {
+    out << log.inputs.time(k);
+    for (int c = 0; c < log.NumChannels(); ++c) {
+      out << ",";
+      if (std::isfinite(log.values(k, c))) out << log.values(k, c);
+      out << ",";
+      if (std::isfinite(model(k, c))) out << model(k, c);
+    }
+    out << "\n";
+  }
+  return out.str();
+}
+
+Figure MeasuredVersusModelFigure(const std::string& title, const EstimationLog& log,
+                                 const Eigen::MatrixXd& model) {
+  Figure f;
+  f.title = title;
+  f.columns = 3;
+  const bool balance = log.kind == LogKind::kBalance;
+  for (int c = 0; c < log.NumChannels(); ++c) {
+    PlotPanel panel;
+    panel.title = log.channel_names[c];
+    panel.x_label = balance ? "row" : "t [s]";
+    PlotSeries measured{"measured", {}, {},
+                        balance ? "points pt 7 ps 0.3" : "lines lc rgb '#999999'"};
+    PlotSeries predicted{"model", {}, {},
+                         balance ? "points pt 6 ps 0.4 lc rgb 'red'" : "lines lc rgb 'red'"};
+    for (int k = 0; k < log.NumRows(); ++k) {
+      const double x = balance ? k : log.inputs.time(k);
+      measured.x.push_back(x);
+      measured.y.push_back(log.values(k, c));
+      predicted.x.push_back(x);
+      predicted.y.push_back(model(k, c));
+    }
+    panel.series = {measured, predicted};
+    f.panels.push_back(panel);
+  }
+  return f;
+}
+
+}  // namespace coaxid

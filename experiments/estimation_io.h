@@ -1,0 +1,35 @@
+// Pieces every estimation command (identify, discover) shares: cutting the
+// logs into estimation and held-out parts (cli-and-reports.md: --validate
+// logs, or a contiguous final part of each log), and measured-vs-model
+// tables and plots.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/log.h"
+#include "core/plot.h"
+#include "ident/estimation_log.h"
+
+namespace coaxid {
+
+struct LogSplit {
+  std::vector<EstimationLog> estimation, validation;
+  std::string description;  // which rows are held out, for reports
+};
+
+// With validate logs: all of logs for estimation, validate for validation.
+// Otherwise the final holdout_fraction of each log is held out (balance logs
+// cut at a hold boundary); 0 holds out nothing.
+LogSplit SplitEstimationAndValidation(const std::vector<Log>& logs,
+                                      const std::vector<Log>& validate, double holdout_fraction);
+
+// CSV: t, then for each channel its measured value and the model's.
+std::string MeasuredVersusModelCsv(const EstimationLog& log, const Eigen::MatrixXd& model);
+// One panel per channel, measured (grey) and model (red).
+Figure MeasuredVersusModelFigure(const std::string& title, const EstimationLog& log,
+                                 const Eigen::MatrixXd& model);
+
+}  // namespace coaxid
