@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <set>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -17,6 +16,7 @@
 #include "dynamics/vehicle.h"
 #include "experiments/cli.h"
 #include "experiments/cli_flags.h"
+#include "experiments/estimation_io.h"
 #include "ident/ekf.h"
 #include "ident/ekf_report.h"
 #include "ident/estimation_log.h"
@@ -108,25 +108,6 @@ std::string ApplyInitialReport(const std::string& path, Vehicle* vehicle, EkfOpt
          " (if that report was estimated from these same logs, the data count twice)";
 }
 
-std::string MeasuredVersusModelCsv(const EstimationLog& log, const Eigen::MatrixXd& model) {
-  std::ostringstream out;
-  out.precision(10);
-  out << "t";
-  for (const std::string& name : log.channel_names) out << "," << name << "," << name << "_model";
-  out << "\n";
-  for (int k = 0; k < log.NumRows(); ++k) {
-    out << log.inputs.time(k);
-    for (int c = 0; c < log.NumChannels(); ++c) {
-      out << ",";
-      if (std::isfinite(log.values(k, c))) out << log.values(k, c);
-      out << ",";
-      if (std::isfinite(model(k, c))) out << model(k, c);
-    }
-    out << "\n";
-  }
-  return out.str();
-}
-
 void PrintEstimates(const EkfResult& r) {
   std::printf("ekf estimates (std from the %s):\n",
               r.covariance_pass ? "covariance pass at the estimates" : "filter");
@@ -208,27 +189,11 @@ int RunIdentifyEkf() {
   const std::vector<Log> logs = ReadFlightLogs(paths, "logs");
   const std::vector<Log> validate_logs = ReadFlightLogs(validate_paths, "validate");
 
-  // Estimation and validation data.
-  std::vector<EstimationLog> estimation, validation;
-  if (!validate_paths.empty()) {
-    for (const Log& log : logs) estimation.push_back(MakeEstimationLog(log));
-    for (const Log& log : validate_logs) validation.push_back(MakeEstimationLog(log));
-    context.validation_description = "the --validate logs, whole";
-  } else if (FLAGS_holdout_fraction > 0) {
-    context.validation_description =
-        "held out: the contiguous final part of each log (--holdout_fraction=" +
-        std::to_string(FLAGS_holdout_fraction) + "):";
-    for (const Log& log : logs) {
-      const int cut = HoldoutStart(log.NumRows(), FLAGS_holdout_fraction, log.source);
-      estimation.push_back(MakeEstimationLog(log, 0, cut));
-      validation.push_back(MakeEstimationLog(log, cut));
-      context.validation_description += " " + log.source + " rows " + std::to_string(cut + 1) +
-                                        "-" + std::to_string(log.NumRows());
-    }
-  } else {
-    for (const Log& log : logs) estimation.push_back(MakeEstimationLog(log));
-    context.validation_description = "none (--holdout_fraction=0 and no --validate)";
-  }
+  // Estimation and validation data (experiments/estimation_io.h).
+  LogSplit split = SplitEstimationAndValidation(logs, validate_logs, FLAGS_holdout_fraction);
+  std::vector<EstimationLog>& estimation = split.estimation;
+  std::vector<EstimationLog>& validation = split.validation;
+  context.validation_description = split.description;
   std::set<std::string> taken;
   MakeNamesUnique(&estimation, &taken);
   if (!validate_paths.empty()) {
