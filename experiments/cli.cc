@@ -28,7 +28,7 @@ constexpr const char* kUsage =
     "usage: coaxid <subcommand> [--flags]\n"
     "  simulate --config=F --scenario=S --out=FILE.csv [--truth=T.json] [--seed=N]\n"
     "  check    --logs=A.csv[,B.csv...] [--config=F]\n"
-    "  identify --method=linear_kf|output_error --logs=A.csv[,B.csv...] --config=F --out=DIR\n"
+    "  identify --method=linear_kf|output_error|ekf --logs=A.csv[,B.csv...] --config=F --out=DIR\n"
     "           [--validate=C.csv,...] [--holdout_fraction=0.2]\n"
     "           linear_kf: [--process_noise=0]\n"
     "           output_error: [--segment_s=1] [--start=config|linear_kf] [--huber=0]\n"
