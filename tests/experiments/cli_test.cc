@@ -10,26 +10,12 @@
 #include <gtest/gtest.h>
 
 #include "core/log.h"
+#include "tests/run_coaxid.h"
 
 namespace coaxid {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct RunResult {
-  int status;
-  std::string output;  // stdout + stderr
-};
-
-RunResult RunCoaxid(const std::string& args) {
-  const std::string command = std::string(COAXID_BINARY) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  char buffer[4096];
-  while (size_t n = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
 
 class CliTest : public ::testing::Test {
  protected:

@@ -16,27 +16,13 @@
 #include "core/atomic_file.h"
 #include "core/plot.h"
 #include "tests/ident/balance_test_util.h"
+#include "tests/run_coaxid.h"
 
 namespace coaxid {
 namespace {
 
 namespace fs = std::filesystem;
 using testing_util::SimulatedBalance;
-
-struct RunResult {
-  int status;
-  std::string output;  // stdout + stderr
-};
-
-RunResult RunCoaxid(const std::string& args) {
-  const std::string command = std::string(COAXID_BINARY) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  char buffer[4096];
-  while (size_t n = fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
 
 bool Contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
