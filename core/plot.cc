@@ -177,6 +177,21 @@ std::string Data(const Figure& figure) {
 
 }  // namespace
 
+std::vector<std::string> RenderFigures(const std::vector<NamedFigure>& figures,
+                                       const std::string& folder, std::string* first_error) {
+  std::vector<std::string> made;
+  first_error->clear();
+  for (const NamedFigure& f : figures) {
+    std::string why;
+    if (RenderFigure(f.figure, folder + "/" + f.file, &why)) {
+      made.push_back(f.file);
+    } else if (first_error->empty()) {
+      *first_error = why;
+    }
+  }
+  return made;
+}
+
 bool GnuplotAvailable() {
   const char* path = std::getenv("PATH");
   if (path == nullptr) return false;

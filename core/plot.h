@@ -46,6 +46,17 @@ struct Figure {
 // installed, fails, or a file cannot be written.
 bool RenderFigure(const Figure& figure, const std::string& png_path, std::string* error);
 
+// A figure and the file name it is rendered to (e.g. "fig08_thrust_map.png").
+struct NamedFigure {
+  std::string file;
+  Figure figure;
+};
+
+// Renders each figure into folder/file. Returns the files made; *first_error
+// gets the reason the first failed one failed (empty when all were made).
+std::vector<std::string> RenderFigures(const std::vector<NamedFigure>& figures,
+                                       const std::string& folder, std::string* first_error);
+
 // True if a `gnuplot` executable is on the PATH.
 bool GnuplotAvailable();
 

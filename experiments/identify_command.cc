@@ -244,13 +244,10 @@ int RunIdentify() {
   std::fprintf(stderr, "identify: plotting (gnuplot) ...\n");
   nlohmann::json plots = nlohmann::json::array();
   std::string plot_error;
-  for (const NamedFigure& f : BaselineFigures(result, names, validation_names)) {
-    std::string why;
-    if (RenderFigure(f.figure, dir + "/plots/" + f.file, &why)) {
-      plots.push_back("plots/" + f.file);
-    } else if (plot_error.empty()) {
-      plot_error = why;
-    }
+  for (const std::string& file :
+       RenderFigures(BaselineFigures(result, names, validation_names), dir + "/plots",
+                     &plot_error)) {
+    plots.push_back("plots/" + file);
   }
   context.outputs = {{"files", files}, {"plots", plots}};
   if (!plot_error.empty()) {

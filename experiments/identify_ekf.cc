@@ -309,13 +309,9 @@ int RunIdentifyEkf() {
   std::fprintf(stderr, "identify: ekf: plotting (gnuplot) ...\n");
   nlohmann::json plots = nlohmann::json::array();
   std::string plot_error;
-  for (const EkfFigure& f : EkfFigures(result, fit_predictions)) {
-    std::string why;
-    if (RenderFigure(f.figure, dir + "/plots/" + f.file, &why)) {
-      plots.push_back("plots/" + f.file);
-    } else if (plot_error.empty()) {
-      plot_error = why;
-    }
+  for (const std::string& file :
+       RenderFigures(EkfFigures(result, fit_predictions), dir + "/plots", &plot_error)) {
+    plots.push_back("plots/" + file);
   }
   context.outputs = {{"files", files}, {"plots", plots}};
   if (!plot_error.empty()) {

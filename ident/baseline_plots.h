@@ -17,11 +17,6 @@
 
 namespace coaxid {
 
-struct NamedFigure {
-  std::string file;  // e.g. "fig08_thrust_map.png"
-  Figure figure;
-};
-
 // names[i]: a file-name-safe name for estimation data set i (and validation
 // data set i in validation_names).
 std::vector<NamedFigure> BaselineFigures(const LinearBaselineResult& result,

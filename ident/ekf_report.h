@@ -69,10 +69,7 @@ std::string EkfParametersCsv(const EkfResult& result);
 // the row's NIS and its degrees of freedom.
 std::string EkfInnovationsCsv(const EkfResult& result);
 
-struct EkfFigure {
-  std::string file;  // e.g. "parameters.png"
-  Figure figure;
-};
+using EkfFigure = NamedFigure;
 // parameters.png (estimates vs time with their 3-sigma band), innovations_NAME.png
 // (innovations with +-3 sqrt(S_ii)), states_NAME.png (measured and estimated),
 // fit_NAME.png (measured and window predictions).

@@ -22,10 +22,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool Contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
 class EkfCliTest : public ::testing::Test {
  protected:
   void SetUp() override {

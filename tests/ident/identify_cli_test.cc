@@ -24,10 +24,6 @@ namespace {
 namespace fs = std::filesystem;
 using testing_util::SimulatedBalance;
 
-bool Contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
 class IdentifyCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
