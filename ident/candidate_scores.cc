@@ -7,6 +7,7 @@
 #include "dynamics/effects/effect_library.h"
 #include "dynamics/model_jacobian.h"
 #include "dynamics/outputs.h"
+#include "core/errors.h"
 #include "ident/residual_analysis.h"
 
 namespace coaxid {
@@ -77,30 +78,81 @@ std::vector<std::string> ReachedChannels(const Vehicle& v, const std::string& ef
   return reached;
 }
 
+// The effect's parameter names ("effect.param").
+std::vector<std::string> EffectParameterNames(const std::string& effect) {
+  std::vector<std::string> out;
+  for (const auto& spec : EffectLibrary()[EffectIndex(effect)].parameters) {
+    out.push_back(effect + "." + spec.name);
+  }
+  return out;
+}
+
+std::vector<std::string> AllParameterNames(const std::vector<std::string>& effects) {
+  std::vector<std::string> out;
+  for (const std::string& e : effects) {
+    for (const std::string& n : EffectParameterNames(e)) out.push_back(n);
+  }
+  return out;
+}
+
+double Seconds(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// Holm's step-down correction over the testable scores: the i-th smallest
+// (0-based) of m p-values is compared with alpha / (m - i), kept monotone.
+void HolmCorrect(std::vector<CandidateScore>* scores, double alpha) {
+  std::vector<CandidateScore*> tested;
+  for (CandidateScore& s : *scores) {
+    if (s.testable) tested.push_back(&s);
+  }
+  std::sort(tested.begin(), tested.end(), [](const CandidateScore* a, const CandidateScore* b) {
+    if (a->p_value != b->p_value) return a->p_value < b->p_value;
+    return a->statistic > b->statistic;
+  });
+  const int m = static_cast<int>(tested.size());
+  double running = 0;
+  for (int i = 0; i < m; ++i) {
+    running = std::max(running, std::min(1.0, (m - i) * tested[i]->p_value));
+    tested[i]->p_corrected = running;
+    tested[i]->passes = running < alpha;
+  }
+}
+
 }  // namespace
 
 nlohmann::json CandidateScore::ToJson() const {
-  nlohmann::json j = {{"effect", effect},
-                      {"round", round},
-                      {"statistic", statistic},
-                      {"test", "F(q, N - P1) on the noise-weighted RSS of a joint refit"},
-                      {"p_value", p_value},
-                      {"p_corrected", p_corrected},
-                      {"correction", "Holm"},
-                      {"passes", passes},
-                      {"testable", testable},
-                      {"channels", channels},
-                      {"reason", reason},
-                      {"num_parameters", num_parameters},
-                      {"rss_before", rss_before},
-                      {"rss_after", rss_after},
-                      {"num_residuals", num_residuals},
-                      {"num_free_parameters", num_free_parameters}};
+  nlohmann::json j = {
+      {"effect", effect},
+      {"round", round},
+      {"statistic", statistic},
+      {"test",
+       "score test of the nested model linearised at the current fit, cluster-robust (Hotelling "
+       "T^2 over segments / holds): F(q, M - q)"},
+      {"p_value", p_value},
+      {"p_corrected", p_corrected},
+      {"correction", "Holm"},
+      {"passes", passes},
+      {"testable", testable},
+      {"channels", channels},
+      {"reason", reason},
+      {"num_parameters", num_parameters},
+      {"clusters", clusters},
+      {"white_noise_statistic", white_statistic},
+      {"white_noise_p_value", white_p_value},
+      {"rss_before", rss_before},
+      {"rss_after", rss_after},
+      {"num_residuals", num_residuals},
+      {"num_free_parameters", num_free_parameters}};
   if (!testable) j["why_not_testable"] = why_not_testable;
-  if (testable) {
+  if (testable) j["linearised_estimates"] = linearised_estimates;
+  if (refitted) {
+    j["refit"] = {{"wald_statistic", wald_statistic},
+                  {"wald_p_value", wald_p_value},
+                  {"confirmed", confirmed}};
+    if (!confirmed) j["refit"]["why_not_confirmed"] = why_not_confirmed;
     nlohmann::json est = nlohmann::json::object();
-    for (const auto& spec : EffectLibrary()[EffectIndex(effect)].parameters) {
-      const std::string name = effect + "." + spec.name;
+    for (const std::string& name : EffectParameterNames(effect)) {
       nlohmann::json e = {{"value", parameters.Value(name)}};
       for (size_t k = 0; k < identifiability.names.size(); ++k) {
         if (identifiability.names[k] == name) {
@@ -148,41 +200,53 @@ Vehicle CandidateVehicle(const Vehicle& vehicle, const std::string& effect) {
   return WithEffect(vehicle, effect, overrides);
 }
 
-std::vector<CandidateScore> ScoreCandidates(const Vehicle& vehicle, const OutputErrorResult& fit,
-                                            const std::vector<EstimationLog>& logs,
-                                            const OutputErrorOptions& fit_options, double alpha,
-                                            int round,
-                                            const std::function<void(const std::string&)>& progress) {
-  const std::vector<std::string> present = vehicle.EffectNames();
-  Vehicle fitted = vehicle;
-  fitted.parameters = fit.parameters;
-  int n0 = 0;
-  const double rss0 = WeightedRss(logs, fit.predictions, fit.noise, &n0);
-
-  OutputErrorOptions o = fit_options;
-  o.noise = fit.noise;
-  o.noise_relaxations = 0;
-  o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
-  // A truncated refit only understates the RSS drop, so the cap keeps the
-  // test conservative; the balance model converges in a few iterations, the
-  // flight model's refits are the cost of a run (~1 s per iteration on 8 s of
-  // 200 Hz flight, measured).
-  o.max_iterations = std::min(o.max_iterations, 30);
-  o.progress = nullptr;
-
-  std::vector<CandidateScore> scores;
+CandidatePass LinearisePass(const Vehicle& fitted, const OutputErrorResult& fit,
+                            const std::vector<EstimationLog>& logs,
+                            const OutputErrorOptions& fit_options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  CandidatePass pass;
+  pass.fitted = fitted;
+  pass.fit = fit;
+  const std::vector<std::string> present = fitted.EffectNames();
+  Vehicle augmented = fitted;
   for (const EffectInfo& info : EffectLibrary()) {
     if (std::find(present.begin(), present.end(), info.name) != present.end()) continue;
+    pass.candidates.push_back(info.name);
+    augmented = CandidateVehicle(augmented, info.name);
+  }
+  std::string why;
+  if (!LineariseFit(augmented, logs, fit.segments, fit.noise, fit_options, &pass.linearised, &why)) {
+    throw ComputationError("linearising the fit for the candidate tests: " + why);
+  }
+  pass.seconds = Seconds(t0);
+  return pass;
+}
+
+std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
+                                            const std::vector<EstimationLog>& logs,
+                                            double alpha, int round) {
+  const LinearisedFit& lin = pass.linearised;
+  int n0 = 0;
+  const double rss0 = WeightedRss(logs, pass.fit.predictions, pass.fit.noise, &n0);
+  // Under the null every candidate is absent: the nuisance columns are the
+  // segment states and the model's own free parameters.
+  const ColumnTester tester(lin, ColumnsExcept(lin, AllParameterNames(pass.candidates)));
+  const int num_free = static_cast<int>(pass.fitted.parameters.FreeIndices().size());
+
+  std::vector<CandidateScore> scores;
+  for (const std::string& effect : pass.candidates) {
+    const EffectInfo& info = EffectLibrary()[EffectIndex(effect)];
     CandidateScore s;
-    s.effect = info.name;
+    s.effect = effect;
     s.description = info.description;
     s.round = round;
     s.num_parameters = static_cast<int>(info.parameters.size());
     s.rss_before = rss0;
     s.rss_after = rss0;
     s.num_residuals = n0;
-    const Vehicle candidate = CandidateVehicle(fitted, info.name);
-    s.channels = ReachedChannels(candidate, info.name, logs, fit.noise);
+    s.num_free_parameters = num_free + s.num_parameters;
+    const Vehicle candidate = CandidateVehicle(pass.fitted, effect);
+    s.channels = ReachedChannels(candidate, effect, logs, pass.fit.noise);
     s.reason = info.description;
     if (s.channels.empty()) {
       s.why_not_testable =
@@ -195,46 +259,28 @@ std::vector<CandidateScore> ScoreCandidates(const Vehicle& vehicle, const Output
     std::string list;
     for (const std::string& c : s.channels) list += (list.empty() ? "" : ", ") + c;
     s.reason += "; it would show in " + list;
-    const auto t0 = std::chrono::steady_clock::now();
-    const OutputErrorResult r = FitOutputError(candidate, logs, o);
-    if (progress) {
-      progress("  refit with " + info.name + ": " + std::to_string(r.iterations) + " iterations, " +
-               std::to_string(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()) + " s");
-    }
-    if (!r.usable) {
-      s.why_not_testable = "the refit with it failed: " + r.why_not_usable;
+    const std::vector<std::string> names = EffectParameterNames(effect);
+    const ColumnTest t = tester.Test(ParameterColumns(lin, names));
+    s.clusters = t.clusters;
+    if (!t.ok) {
+      s.why_not_testable = t.why_not;
       scores.push_back(s);
       continue;
     }
     s.testable = true;
-    s.parameters = r.parameters;
-    s.identifiability = r.identifiability;
-    int n1 = 0;
-    s.rss_after = WeightedRss(logs, r.predictions, fit.noise, &n1);
-    s.num_free_parameters = static_cast<int>(r.parameters.FreeIndices().size());
-    const double dof2 = std::max(1, n1 - s.num_free_parameters);
-    const double drop = s.rss_before - s.rss_after;
-    s.statistic = drop > 0 ? (drop / s.num_parameters) / (s.rss_after / dof2) : 0.0;
-    s.p_value = FSurvival(s.statistic, s.num_parameters, dof2);
+    s.statistic = t.statistic;
+    s.p_value = t.p_value;
+    s.white_statistic = t.white_statistic;
+    s.white_p_value = t.white_p_value;
+    s.rss_after = rss0 - t.predicted_rss_drop;
+    for (size_t k = 0; k < names.size(); ++k) {
+      const int column = lin.ParameterColumn(names[k]) - lin.num_state_columns;
+      s.linearised_estimates[names[k]] =
+          candidate.parameters.Value(names[k]) + t.step[k] * lin.parameter_scales[column];
+    }
     scores.push_back(s);
   }
-  // Holm: sort the tested p-values ascending; the i-th (0-based) of m is
-  // compared with alpha / (m - i), monotone.
-  std::vector<CandidateScore*> tested;
-  for (CandidateScore& s : scores) {
-    if (s.testable) tested.push_back(&s);
-  }
-  std::sort(tested.begin(), tested.end(), [](const CandidateScore* a, const CandidateScore* b) {
-    if (a->p_value != b->p_value) return a->p_value < b->p_value;
-    return a->statistic > b->statistic;
-  });
-  const int m = static_cast<int>(tested.size());
-  double running = 0;
-  for (int i = 0; i < m; ++i) {
-    running = std::max(running, std::min(1.0, (m - i) * tested[i]->p_value));
-    tested[i]->p_corrected = running;
-    tested[i]->passes = running < alpha;
-  }
+  HolmCorrect(&scores, alpha);
   std::stable_sort(scores.begin(), scores.end(),
                    [](const CandidateScore& a, const CandidateScore& b) {
                      if (a.passes != b.passes) return a.passes;
@@ -243,6 +289,61 @@ std::vector<CandidateScore> ScoreCandidates(const Vehicle& vehicle, const Output
                      return a.statistic > b.statistic;
                    });
   return scores;
+}
+
+bool ConfirmCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
+                      const OutputErrorOptions& fit_options, double alpha, CandidateScore* score,
+                      CandidatePass* next) {
+  score->refitted = true;
+  Vehicle candidate = CandidateVehicle(pass.fitted, score->effect);
+  // Start at the Gauss-Newton step, inside the bounds.
+  for (const auto& [name, value] : score->linearised_estimates) {
+    const Parameter& p = candidate.parameters.Get(name);
+    candidate.parameters.SetValue(name, std::clamp(value, p.lower, p.upper));
+  }
+  // The other parameters start at the current fit: the final segment length
+  // alone, from the current noise weights (re-estimated as the options say).
+  OutputErrorOptions o = fit_options;
+  o.noise = pass.fit.noise;
+  o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
+  const OutputErrorResult refit = FitOutputError(candidate, logs, o);
+  if (!refit.usable) {
+    score->why_not_confirmed = "the joint refit failed: " + refit.why_not_usable;
+    return false;
+  }
+  score->parameters = refit.parameters;
+  score->identifiability = refit.identifiability;
+  int n1 = 0;
+  score->rss_after = WeightedRss(logs, refit.predictions, pass.fit.noise, &n1);
+  candidate.parameters = refit.parameters;
+  CandidatePass at_refit = LinearisePass(candidate, refit, logs, fit_options);
+  const LinearisedFit& lin = at_refit.linearised;
+  const std::vector<std::string> names = EffectParameterNames(score->effect);
+  std::vector<std::string> excluded = AllParameterNames(at_refit.candidates);
+  excluded.insert(excluded.end(), names.begin(), names.end());
+  const ColumnTester tester(lin, ColumnsExcept(lin, excluded));
+  // Scaled distance from absence (every effect's absent value is 0).
+  Eigen::VectorXd values(names.size());
+  for (size_t k = 0; k < names.size(); ++k) {
+    const int column = lin.ParameterColumn(names[k]) - lin.num_state_columns;
+    values[k] = refit.parameters.Value(names[k]) / lin.parameter_scales[column];
+  }
+  const ColumnTest t = tester.Test(ParameterColumns(lin, names), &values);
+  if (!t.ok) {
+    score->why_not_confirmed = "at the refit: " + t.why_not;
+    return false;
+  }
+  score->wald_statistic = t.statistic;
+  score->wald_p_value = t.p_value;
+  score->confirmed = t.p_value < alpha;
+  if (!score->confirmed) {
+    score->why_not_confirmed = "at the joint refit its parameters are not significantly away from "
+                               "absence (cluster-robust Wald p = " +
+                               std::to_string(t.p_value) + ")";
+    return false;
+  }
+  *next = std::move(at_refit);
+  return true;
 }
 
 }  // namespace coaxid

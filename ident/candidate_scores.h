@@ -1,27 +1,37 @@
 // Scores of the library's candidate effects against a fitted model
-// (effects.md, step 3).
+// (effects.md, step 3), by linearised tests around the current fit.
 //
-// For each effect not yet in the model: the effect is added with its
-// parameters free and starting where the effect is absent (ground_effect's
-// k_ge starts at 0 with bounds [0, 3]); its regressors along the data are the
-// output Jacobians w.r.t. its parameters (model_jacobian.h), which say which
-// channels it can reach; then the model with the effect is refitted jointly
-// (every parameter free, the noise weights of the current fit held fixed) and
-// the nested models are compared with the F-test
-//     F = ((RSS0 - RSS1) / q) / (RSS1 / (N - P1)),   p = P(F(q, N - P1) > F),
-// RSS the noise-weighted residual sum of squares over every output sample,
-// q the effect's parameter count, P1 the free parameters with it.
-// p-values are corrected for the candidates tried with Holm's step-down
-// method (which controls the family-wise error rate like Bonferroni, less
-// conservatively).
+// Every effect not yet in the model is added at once, its parameters free
+// at the values where it is absent (ground_effect's k_ge at 0, bounds
+// [0, 3]); one sensitivity pass along the fitted trajectory gives the
+// output-error problem linearised there (linearised_fit.h), with each
+// candidate's output sensitivities as extra columns. A candidate is scored by
+// the score (Lagrange multiplier) test of the nested model: the regression of
+// the weighted residuals on its columns with every direction already
+// estimated (segment states, current parameters) projected out, the
+// Gauss-Newton step of the model with it. The p-value comes from the
+// cluster-robust (Hotelling) form of the test, clusters being the
+// multiple-shooting segments of flight logs and the holds of balance logs, so
+// autocorrelated flight residuals do not inflate it the way the white-noise
+// F-test does (kept in the table for comparison). p-values are corrected for
+// the candidates tried with Holm's step-down method (family-wise error rate
+// like Bonferroni, less conservatively). Its regressors along the data also
+// say which channels it can reach, hence the physical reason it would show
+// there.
+//
+// The best passing candidate is then confirmed (ConfirmCandidate): a joint
+// refit with it, and the cluster-robust Wald test of its parameters at the
+// refit (linearised there, which is also the next round's scoring pass).
 #pragma once
 
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "dynamics/vehicle.h"
 #include "ident/estimation_log.h"
+#include "ident/linearised_fit.h"
 #include "ident/output_error.h"
 
 namespace coaxid {
@@ -29,18 +39,25 @@ namespace coaxid {
 struct CandidateScore {
   std::string effect, description;
   int round = 0;                      // loop round (1 = against the declared model)
-  bool testable = false;              // some channel of these logs depends on it
+  bool testable = false;              // some channel of these logs depends on it, separably
   std::string why_not_testable;
   std::vector<std::string> channels;  // channels its regressors reach
   std::string reason;                 // the physical reason it would show in those channels
   int num_parameters = 0;
-  double rss_before = 0, rss_after = 0;
+  double rss_before = 0, rss_after = 0;  // after: predicted by the linearisation (or the refit)
   int num_residuals = 0, num_free_parameters = 0;
-  double statistic = 0;               // F
+  int clusters = 0;                   // independent clusters of the robust test
+  double statistic = 0;               // cluster-robust score F(q, M - q)
   double p_value = 1;                 // uncorrected
   double p_corrected = 1;             // Holm over the candidates tried this round
+  double white_statistic = 0, white_p_value = 1;  // the white-noise score F, for comparison
   bool passes = false;
-  ParameterSet parameters;            // the refit's estimates (testable only)
+  std::map<std::string, double> linearised_estimates;  // absent value + Gauss-Newton step
+  // Confirmation (the best passing candidate of a round): joint refit, Wald test.
+  bool refitted = false, confirmed = false;
+  double wald_statistic = 0, wald_p_value = 1;
+  std::string why_not_confirmed;
+  ParameterSet parameters;            // the refit's estimates (refitted only)
   IdentifiabilityReport identifiability;
   nlohmann::json ToJson() const;
 };
@@ -53,12 +70,34 @@ double WeightedRss(const std::vector<EstimationLog>& logs,
 // The vehicle with `effect` added for scoring (parameters free, absent).
 Vehicle CandidateVehicle(const Vehicle& vehicle, const std::string& effect);
 
-// Scores every library effect not in `vehicle` (whose fit is `fit`, on `logs`).
-// Sorted: passing first, then by p-value, then by statistic.
-std::vector<CandidateScore> ScoreCandidates(const Vehicle& vehicle, const OutputErrorResult& fit,
+// A fitted model linearised with every library effect it lacks as candidate
+// columns: the scoring pass of one round.
+struct CandidatePass {
+  Vehicle fitted;                      // the model with its estimates
+  OutputErrorResult fit;
+  std::vector<std::string> candidates;  // effects not in the model
+  LinearisedFit linearised;            // of fitted + every candidate (absent)
+  double seconds = 0;
+};
+
+// Throws ComputationError if the model cannot be simulated along the fit.
+CandidatePass LinearisePass(const Vehicle& fitted, const OutputErrorResult& fit,
+                            const std::vector<EstimationLog>& logs,
+                            const OutputErrorOptions& fit_options);
+
+// Scores every candidate of the pass. Sorted: passing first, then by p-value,
+// then by statistic.
+std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
                                             const std::vector<EstimationLog>& logs,
-                                            const OutputErrorOptions& fit_options, double alpha,
-                                            int round,
-                                            const std::function<void(const std::string&)>& progress = nullptr);
+                                            double alpha, int round);
+
+// Refits `score.effect` jointly into the pass's model (starting at its
+// linearised estimates, noise weights of the current fit) and tests its
+// parameters at the refit (cluster-robust Wald, at level alpha). Fills the
+// score's confirmation fields; returns the pass at the refit (the next
+// round's scoring pass) in *next when confirmed.
+bool ConfirmCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
+                      const OutputErrorOptions& fit_options, double alpha, CandidateScore* score,
+                      CandidatePass* next);
 
 }  // namespace coaxid

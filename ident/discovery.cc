@@ -16,6 +16,22 @@ void Say(const DiscoveryOptions& o, const std::string& line) {
   if (o.progress) o.progress(line);
 }
 
+double Seconds(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+std::string Number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", v);
+  return text;
+}
+
+std::string Elapsed(double seconds) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f s", seconds);
+  return text;
+}
+
 ModelSnapshot Snapshot(const Vehicle& vehicle, const OutputErrorResult& r,
                        const std::vector<EstimationLog>& estimation,
                        const std::vector<EstimationLog>& validation, const DiscoveryOptions& o) {
@@ -81,6 +97,7 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
     *why = "window_s must be > 0";
     return false;
   }
+  if (!dictionary.IsValid(why)) return false;
   if (residuals.lags < 1) {
     *why = "residual lags must be >= 1";
     return false;
@@ -125,37 +142,47 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   current.parameters = fit.parameters;
   out.baseline = Snapshot(current, fit, estimation, validation, options);
 
+  CandidatePass pass = LinearisePass(current, fit, estimation, options.fit);
+  Say(options, "discover: sensitivities of " + std::to_string(pass.candidates.size()) +
+                   " candidate effects along the fit: " + Elapsed(pass.seconds));
   for (int round = 1; round <= options.max_added + 1; ++round) {
     Say(options, "discover: round " + std::to_string(round) + ": scoring candidates against " +
                      (out.added.empty() ? std::string("the declared model")
                                         : "the model with " + std::to_string(out.added.size()) +
                                               " added effect(s)"));
     std::vector<CandidateScore> scores =
-        ScoreCandidates(current, fit, estimation, options.fit, options.alpha, round, options.progress);
+        ScoreCandidates(pass, estimation, options.alpha, round);
     for (const CandidateScore& s : scores) {
       char line[256];
-      std::snprintf(line, sizeof(line), "  %-18s F = %-10.4g p = %-10.3g p_holm = %-10.3g %s",
-                    s.effect.c_str(), s.statistic, s.p_value, s.p_corrected,
+      std::snprintf(line, sizeof(line),
+                    "  %-18s F = %-10.4g p = %-10.3g p_holm = %-10.3g (white-noise p = %.3g) %s",
+                    s.effect.c_str(), s.statistic, s.p_value, s.p_corrected, s.white_p_value,
                     !s.testable ? "not testable" : s.passes ? "passes" : "fails");
       Say(options, line);
     }
-    const CandidateScore* best = nullptr;
-    for (const CandidateScore& s : scores) {
-      if (s.passes && (!best || s.p_value < best->p_value ||
-                       (s.p_value == best->p_value && s.statistic > best->statistic))) {
-        best = &s;
+    bool accepted = false;
+    if (static_cast<int>(out.added.size()) < options.max_added) {
+      for (CandidateScore& s : scores) {
+        if (!s.passes) break;  // passing candidates come first, best first
+        Say(options, "discover: confirming " + s.effect + " by a joint refit (" +
+                         Elapsed(Seconds(start)) + " so far)");
+        CandidatePass next;
+        if (ConfirmCandidate(pass, estimation, options.fit, options.alpha, &s, &next)) {
+          Say(options, "discover: added " + s.effect + " (Wald p = " +
+                           Number(s.wald_p_value) + ")");
+          pass = std::move(next);
+          out.added.push_back(s.effect);
+          accepted = true;
+          break;
+        }
+        Say(options, "discover: " + s.effect + " not confirmed: " + s.why_not_confirmed);
       }
     }
     out.candidates.insert(out.candidates.end(), scores.begin(), scores.end());
-    if (!best || static_cast<int>(out.added.size()) >= options.max_added) break;
-    Say(options, "discover: adding " + best->effect + ", refitting jointly");
-    Vehicle next = CandidateVehicle(current, best->effect);
-    next.parameters = best->parameters;  // start from the scoring refit
-    fit = FitOrThrow(next, estimation, options.fit, "the refit with " + best->effect);
-    current = next;
-    current.parameters = fit.parameters;
-    out.added.push_back(best->effect);
+    if (!accepted) break;
   }
+  current = pass.fitted;
+  fit = pass.fit;
   out.final = out.added.empty() ? out.baseline
                                 : Snapshot(current, fit, estimation, validation, options);
 
@@ -180,9 +207,11 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                   t.ljung_box_p, t.rms, t.noise_std > 0 ? t.rms / t.noise_std : INFINITY,
                   t.noise_std, u.correlates_with.c_str(), u.correlation);
     u.why = text;
+    u.generic = SearchChannelDictionary(estimation, out.final.result.predictions, t.channel,
+                                        options.dictionary);
     out.unexplained.push_back(u);
   }
-  out.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  out.seconds = Seconds(start);
   return out;
 }
 
@@ -198,7 +227,8 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
                            {"noise_std", u.noise_std},
                            {"correlates_with", u.correlates_with},
                            {"correlation", u.correlation},
-                           {"why", u.why}});
+                           {"why", u.why},
+                           {"generic_candidate", u.generic.ToJson()}});
   }
   nlohmann::json added_parameters = nlohmann::json::object();
   const nlohmann::json final_parameters =
@@ -218,8 +248,11 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
            {{"alpha", options.alpha},
             {"correction", "Holm over the candidates tested in each round"},
             {"candidate_test",
-             "F-test of nested models: joint refit with the candidate, noise weights of the "
-             "current fit held fixed"},
+             "score test of the nested model linearised at the current fit (candidate output "
+             "sensitivities, estimated directions projected out), cluster-robust over "
+             "multiple-shooting segments and balance holds (Hotelling T^2, F(q, M - q)); the "
+             "best passing candidate is refitted jointly and confirmed by the cluster-robust "
+             "Wald test of its parameters"},
             {"whiteness_test", "Ljung-Box, chi-square p-value by the regularized incomplete gamma"},
             {"ljung_box_lags", options.residuals.lags},
             {"unexplained_rms_ratio", options.unexplained_rms_ratio},

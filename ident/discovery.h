@@ -17,6 +17,7 @@
 #include "dynamics/vehicle.h"
 #include "ident/candidate_scores.h"
 #include "ident/estimation_log.h"
+#include "ident/generic_dictionary.h"
 #include "ident/output_error.h"
 #include "ident/residual_analysis.h"
 
@@ -30,6 +31,7 @@ struct DiscoveryOptions {
   // times its sample-to-sample noise estimate.
   double unexplained_rms_ratio = 1.5;
   ResidualAnalysisOptions residuals;
+  DictionaryOptions dictionary;  // step 7, on unexplained channels
   OutputErrorOptions fit;
   std::function<void(const std::string&)> progress;  // progress lines; nullptr: none
   bool IsValid(std::string* why) const;
@@ -50,6 +52,9 @@ struct UnexplainedChannel {
   std::string correlates_with;
   double correlation = 0;
   std::string why;
+  // Step 7: the generic dictionary's best terms for this residual (an
+  // unnamed candidate to interpret; never added).
+  DictionarySearch generic;
 };
 
 struct DiscoveryResult {

@@ -16,26 +16,10 @@
 #include "experiments/simulate_experiment.h"
 #include "ident/discovery.h"
 #include "ident/residual_analysis.h"
+#include "tests/ident/discover_test_util.h"
 
 namespace coaxid {
 namespace {
-
-using Effects = std::vector<std::pair<std::string, std::map<std::string, ParameterOverride>>>;
-
-Vehicle Nominal() { return LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml"); }
-
-// The shipped flight scenario's off-nominal truth parameters, with `effects`.
-Vehicle Truth(const Effects& effects) {
-  Scenario s = LoadScenario(std::string(COAXID_SOURCE_DIR) + "/configs/scenarios/flight.yaml");
-  s.truth_effects = effects;
-  return MakeTruthVehicle(Nominal().config, s);
-}
-
-ParameterOverride Value(double v) {
-  ParameterOverride o;
-  o.value = v;
-  return o;
-}
 
 Log BalanceLog(const Vehicle& truth, uint64_t seed) {
   BalanceScenario b;  // the default staircase, short holds
@@ -54,19 +38,6 @@ DiscoveryOptions Options() {
 DiscoveryResult DiscoverOn(const Log& estimation, const Log& validation) {
   return Discover(Nominal(), {MakeEstimationLog(estimation)}, {MakeEstimationLog(validation)},
                   Options());
-}
-
-void ExpectWithinThreeStd(const DiscoveryResult& r, const Vehicle& truth, const std::string& name) {
-  const ParameterSet& p = r.final.result.parameters;
-  const IdentifiabilityReport& id = r.final.result.identifiability;
-  for (size_t k = 0; k < id.names.size(); ++k) {
-    if (id.names[k] != name) continue;
-    ASSERT_TRUE(id.identifiable[k]) << name;
-    // 3 std: a 0.3 % two-sided miss per parameter for a consistent estimator.
-    EXPECT_NEAR(p.Value(name), truth.parameters.Value(name), 3 * id.std[k]) << name;
-    return;
-  }
-  ADD_FAILURE() << name << " not estimated";
 }
 
 TEST(DiscoverStatistics, PValuesMatchClosedForms) {

@@ -1,0 +1,105 @@
+// The output-error problem linearised at a fit: the Gauss-Newton model the
+// candidate tests of candidate_scores.h work on (fast: one sensitivity pass
+// instead of one nonlinear refit per candidate).
+//
+// With r the noise-weighted residuals of the output-error problem
+// (output_error_costs.h: flight segments started from their fitted states,
+// their continuity ties, balance holds) and J = dr/d[s, theta] the Jacobian
+// w.r.t. every segment start state s and every free parameter of `vehicle`
+// (scaled, value / scale), this holds
+//   N = J^T J,   b = J^T r,   and b_c = J_c^T r_c for every cluster c,
+// a cluster being a group of residuals taken as independent of the others
+// (the unit of the cluster-robust covariance of the score): one
+// multiple-shooting segment of a flight log with its continuity tie, one
+// constant-input hold of a balance log. Candidate effects enter as extra free
+// parameters at the values where they are absent, so r is the fit's own
+// residual and their columns are the candidate's output sensitivities along
+// the fitted trajectory (CVODES, the same costs as the fit).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "dynamics/vehicle.h"
+#include "ident/estimation_log.h"
+#include "ident/noise_weights.h"
+#include "ident/output_error.h"
+
+namespace coaxid {
+
+struct LinearisedFit {
+  int num_state_columns = 0;                // segment start states, 12 per segment, first
+  std::vector<std::string> parameter_names;  // free parameters, the columns after the states
+  Eigen::VectorXd parameter_scales;         // their scales (column = d r / d(value / scale))
+  Eigen::MatrixXd normal;                   // N = J^T J (all columns)
+  Eigen::VectorXd gradient;                 // b = J^T r
+  std::vector<Eigen::VectorXd> cluster_gradients;  // b_c per cluster
+  std::vector<int> cluster_residuals;       // residuals per cluster
+  double rss = 0;                           // r^T r
+  int num_residuals = 0;
+
+  int NumColumns() const { return static_cast<int>(normal.rows()); }
+  // Column of a free parameter, or -1.
+  int ParameterColumn(const std::string& name) const;
+};
+
+// Linearises the problem of `vehicle`'s free parameters on `logs` at the
+// vehicle's parameter values and the fitted flight segments (one
+// FittedSegments per log, empty for balance logs; from OutputErrorResult).
+// False with the reason if a segment cannot be simulated.
+bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
+                  const std::vector<FittedSegments>& segments, const NoiseWeights& noise,
+                  const OutputErrorOptions& options, LinearisedFit* out, std::string* why);
+
+// A group of columns tested against the others of a linearised fit, the
+// nuisance columns (those already estimated) projected out:
+//   Z~ = Z - J_0 (J_0^T J_0)^+ J_0^T Z,  g_c = Z~_c^T r_c (cluster scores),
+//   G = sum_c g_c = Z~^T r,  S = Z~^T Z~ = N_ZZ - N_Z0 N_00^+ N_0Z.
+// Score test (the group at zero, i.e. absent): with the M cluster scores'
+// centred covariance C, Hotelling's T^2 = M gbar^T C^-1 gbar and
+//   F = (M - q) / (q (M - 1)) T^2 ~ F(q, M - q)
+// (exact for independent Gaussian cluster scores; valid whatever the
+// correlation of the residuals within a cluster, hence honest on coloured
+// flight residuals). The Gauss-Newton step of the nested model is
+// delta = S^-1 G, its predicted drop of the RSS G^T S^-1 G; the white-noise
+// score statistic (G^T S^-1 G / q) / (RSS / (N - P)) is kept for comparison.
+// Wald test (the group present at `values_scaled`, after a refit): the same
+// F with T^2 = M delta^T (S^-1 C S^-1)^-1 delta, delta = values_scaled.
+struct ColumnTest {
+  bool ok = false;
+  std::string why_not;           // not ok: e.g. "explained by the parameters already estimated"
+  int q = 0, clusters = 0;
+  double statistic = 0;          // cluster-robust F(q, M - q)
+  double p_value = 1;
+  double white_statistic = 0;    // white-noise score F(q, N - P)
+  double white_p_value = 1;
+  double predicted_rss_drop = 0;
+  Eigen::VectorXd step;          // Gauss-Newton step of the tested columns (scaled)
+};
+
+class ColumnTester {
+ public:
+  // nuisance: columns estimated under the null (states and parameters).
+  ColumnTester(const LinearisedFit& fit, const std::vector<int>& nuisance);
+  // values_scaled: null for the score test, else the group's scaled values (Wald).
+  ColumnTest Test(const std::vector<int>& tested, const Eigen::VectorXd* values_scaled = nullptr) const;
+
+ private:
+  const LinearisedFit& fit_;
+  std::vector<int> nuisance_;
+  int rank_ = 0;
+  // N_00^+ = D^-1 V diag(1 / lambda) V^T D^-1 on the Jacobi-scaled nuisance block.
+  Eigen::VectorXd inverse_scale_;  // D^-1
+  Eigen::MatrixXd basis_;          // V, rank_ columns
+  Eigen::VectorXd inverse_eigenvalues_;
+};
+
+// Every column of a linearised fit (segment states and parameters) except the
+// listed parameters'.
+std::vector<int> ColumnsExcept(const LinearisedFit& fit, const std::vector<std::string>& parameters);
+// Columns of the listed parameters (every name must be free in the fit).
+std::vector<int> ParameterColumns(const LinearisedFit& fit, const std::vector<std::string>& parameters);
+
+}  // namespace coaxid
