@@ -138,6 +138,7 @@ nlohmann::json CandidateScore::ToJson() const {
       {"reason", reason},
       {"num_parameters", num_parameters},
       {"clusters", clusters},
+      {"covariance_dof", covariance_dof},
       {"white_noise_statistic", white_statistic},
       {"white_noise_p_value", white_p_value},
       {"rss_before", rss_before},
@@ -214,8 +215,15 @@ CandidatePass LinearisePass(const Vehicle& fitted, const OutputErrorResult& fit,
     pass.candidates.push_back(info.name);
     augmented = CandidateVehicle(augmented, info.name);
   }
+  std::vector<int> cluster_rows;
+  for (size_t i = 0; i < logs.size(); ++i) {
+    cluster_rows.push_back(logs[i].kind == LogKind::kFlight
+                               ? ClusterRows(logs[i], fit.predictions[i])
+                               : 1);
+  }
   std::string why;
-  if (!LineariseFit(augmented, logs, fit.segments, fit.noise, fit_options, &pass.linearised, &why)) {
+  if (!LineariseFit(augmented, logs, fit.segments, fit.noise, cluster_rows, fit_options,
+                    &pass.linearised, &why)) {
     throw ComputationError("linearising the fit for the candidate tests: " + why);
   }
   pass.seconds = Seconds(t0);
@@ -262,6 +270,7 @@ std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
     const std::vector<std::string> names = EffectParameterNames(effect);
     const ColumnTest t = tester.Test(ParameterColumns(lin, names));
     s.clusters = t.clusters;
+    s.covariance_dof = t.covariance_dof;
     if (!t.ok) {
       s.why_not_testable = t.why_not;
       scores.push_back(s);
@@ -306,6 +315,10 @@ bool ConfirmCandidate(const CandidatePass& pass, const std::vector<EstimationLog
   OutputErrorOptions o = fit_options;
   o.noise = pass.fit.noise;
   o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
+  // Stop when an iteration changes the cost by less than 1e-6 of itself: one
+  // std of any parameter changes it by 0.5 / cost (3e-5 of a 15000 cost, 10 s
+  // of flight), and the last iterations of a warm refit crawl far below that.
+  o.function_tolerance = std::max(o.function_tolerance, 1e-6);
   const OutputErrorResult refit = FitOutputError(candidate, logs, o);
   if (!refit.usable) {
     score->why_not_confirmed = "the joint refit failed: " + refit.why_not_usable;

@@ -46,7 +46,8 @@ struct CandidateScore {
   int num_parameters = 0;
   double rss_before = 0, rss_after = 0;  // after: predicted by the linearisation (or the refit)
   int num_residuals = 0, num_free_parameters = 0;
-  int clusters = 0;                   // independent clusters of the robust test
+  int clusters = 0;                   // clusters of the robust test
+  double covariance_dof = 0;          // nu of its score covariance
   double statistic = 0;               // cluster-robust score F(q, M - q)
   double p_value = 1;                 // uncorrected
   double p_corrected = 1;             // Holm over the candidates tried this round

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <thread>
 
@@ -21,13 +22,37 @@ struct ClusterJob {
   std::unique_ptr<ceres::CostFunction> cost;
   std::vector<const double*> blocks;
   std::vector<int> block_columns;  // first column of each parameter block
+  std::vector<int> cluster_ends;   // residual index ending each cluster (the last = all)
+  int stratum = 0;
   // Filled by Evaluate:
   bool ok = false;
   std::vector<int> columns;        // global column of each local column
   Eigen::MatrixXd normal;          // local J^T J
-  Eigen::VectorXd gradient;        // local J^T r
+  std::vector<Eigen::VectorXd> gradients;  // local J^T r of each cluster
   double rss = 0;
 };
+
+// Cluster ends of a flight segment's residuals (FlightSegmentCost's order:
+// rows first..end, each row's finite channels, then the 12 continuity
+// residuals, which go with the last cluster): every `rows` rows.
+std::vector<int> SegmentClusterEnds(const EstimationLog& log, int first, int last, bool has_next,
+                                    int rows) {
+  std::vector<int> ends;
+  const int end = has_next ? last - 1 : last;
+  int residuals = 0;
+  for (int k = first; k <= end; ++k) {
+    for (int c = 0; c < log.NumChannels(); ++c) residuals += std::isfinite(log.values(k, c));
+    const bool boundary = (k - first + 1) % rows == 0 && end - k >= rows / 2;
+    if (boundary && residuals > (ends.empty() ? 0 : ends.back())) ends.push_back(residuals);
+  }
+  if (has_next) residuals += kNumStates;
+  if (ends.empty() || ends.back() < residuals) {
+    ends.push_back(residuals);
+  } else {
+    ends.back() = residuals;
+  }
+  return ends;
+}
 
 void Evaluate(ClusterJob* job) {
   const ceres::CostFunction& cost = *job->cost;
@@ -53,7 +78,12 @@ void Evaluate(ClusterJob* job) {
   }
   if (!J.allFinite()) return;
   job->normal = J.transpose() * J;
-  job->gradient = J.transpose() * r;
+  int begin = 0;
+  for (int end : job->cluster_ends) {
+    job->gradients.push_back(J.middleRows(begin, end - begin).transpose() *
+                             r.segment(begin, end - begin));
+    begin = end;
+  }
   job->rss = r.squaredNorm();
   job->ok = true;
 }
@@ -67,10 +97,44 @@ int LinearisedFit::ParameterColumn(const std::string& name) const {
   return -1;
 }
 
+int ClusterRows(const EstimationLog& log, const Eigen::MatrixXd& prediction) {
+  const int n = log.NumRows();
+  double tau = 1;
+  for (int c = 0; c < log.NumChannels(); ++c) {
+    std::vector<double> r;
+    for (int k = 0; k < n; ++k) {
+      const double v = log.values(k, c) - prediction(k, c);
+      if (std::isfinite(v)) r.push_back(v);
+    }
+    const int m = static_cast<int>(r.size());
+    if (m < 20) continue;
+    double mean = 0;
+    for (double v : r) mean += v / m;
+    double c0 = 0;
+    for (double& v : r) {
+      v -= mean;
+      c0 += v * v;
+    }
+    if (!(c0 > 0)) continue;
+    double t = 1;
+    for (int l = 1; l <= std::min(200, m / 4); ++l) {
+      double cl = 0;
+      for (int k = l; k < m; ++k) cl += r[k] * r[k - l];
+      const double rho = cl / c0;
+      if (rho <= 0) break;
+      t += 2 * rho;
+    }
+    tau = std::max(tau, t);
+  }
+  return std::max(10, static_cast<int>(std::ceil(3 * tau)));
+}
+
 bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
                   const std::vector<FittedSegments>& segments, const NoiseWeights& noise,
-                  const OutputErrorOptions& options, LinearisedFit* out, std::string* why) {
+                  const std::vector<int>& cluster_rows, const OutputErrorOptions& options,
+                  LinearisedFit* out, std::string* why) {
   CHECK_EQ(logs.size(), segments.size());
+  CHECK_EQ(logs.size(), cluster_rows.size());
   const FreeParameters free(vehicle.parameters);
   const Eigen::VectorXd theta_scaled = free.ScaledValues();
   int state_columns = 0;
@@ -92,6 +156,8 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
                                                      channel_std);
         job.blocks = {theta_scaled.data()};
         job.block_columns = {theta_column};
+        job.cluster_ends = {job.cost->num_residuals()};
+        job.stratum = static_cast<int>(i);
         if (job.cost->num_residuals() > 0) jobs.push_back(std::move(job));
         first = end;
       }
@@ -106,6 +172,9 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
       job.cost = std::make_unique<FlightSegmentCost>(vehicle.model, free, log, seg.starts[j], last,
                                                      has_next, channel_std,
                                                      options.continuity_std, options.integrator);
+      job.cluster_ends = SegmentClusterEnds(log, seg.starts[j], last, has_next, cluster_rows[i]);
+      CHECK_EQ(job.cluster_ends.back(), job.cost->num_residuals());
+      job.stratum = static_cast<int>(i);
       job.blocks = {seg.states[j].data(), theta_scaled.data()};
       job.block_columns = {segment_column + kNumStates * static_cast<int>(j), theta_column};
       if (has_next) {
@@ -140,16 +209,21 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
       *why = "the model cannot be evaluated along the fitted trajectory (CVODE failed)";
       return false;
     }
-    Eigen::VectorXd b = Eigen::VectorXd::Zero(D);
     for (size_t a = 0; a < job.columns.size(); ++a) {
-      b[job.columns[a]] += job.gradient[a];
       for (size_t c = 0; c < job.columns.size(); ++c) {
         f.normal(job.columns[a], job.columns[c]) += job.normal(a, c);
       }
     }
-    f.gradient += b;
-    f.cluster_gradients.push_back(std::move(b));
-    f.cluster_residuals.push_back(job.cost->num_residuals());
+    int begin = 0;
+    for (size_t k = 0; k < job.gradients.size(); ++k) {
+      Eigen::VectorXd b = Eigen::VectorXd::Zero(D);
+      for (size_t a = 0; a < job.columns.size(); ++a) b[job.columns[a]] += job.gradients[k][a];
+      f.gradient += b;
+      f.cluster_gradients.push_back(std::move(b));
+      f.cluster_residuals.push_back(job.cluster_ends[k] - begin);
+      f.cluster_strata.push_back(job.stratum);
+      begin = job.cluster_ends[k];
+    }
     f.rss += job.rss;
     f.num_residuals += job.cost->num_residuals();
   }
@@ -220,11 +294,6 @@ ColumnTest ColumnTester::Test(const std::vector<int>& tested, const Eigen::Vecto
       return t;
     }
   }
-  if (M < q + 2) {
-    t.why_not = "too few independent clusters (" + std::to_string(M) +
-                ") for a covariance of its score";
-    return t;
-  }
   // Projected cluster scores g_c = b_c[Z] - X^T b_c[0] (q x M).
   Eigen::MatrixXd g(q, M);
   for (int m = 0; m < M; ++m) {
@@ -234,30 +303,50 @@ ColumnTest ColumnTester::Test(const std::vector<int>& tested, const Eigen::Vecto
     for (int c = 0; c < q; ++c) g(c, m) = b[tested[c]];
     g.col(m) -= X.transpose() * b0;
   }
+  // C, centred within each stratum; nu from the strata that carry the score.
+  std::map<int, std::vector<int>> strata;
+  for (int m = 0; m < M; ++m) strata[fit_.cluster_strata[m]].push_back(m);
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(q, q);
+  std::vector<std::pair<double, int>> shares;  // (trace, M_l - 1)
+  for (const auto& [stratum, members] : strata) {
+    const int Ml = static_cast<int>(members.size());
+    if (Ml < 2) continue;
+    Eigen::VectorXd mean = Eigen::VectorXd::Zero(q);
+    for (int m : members) mean += g.col(m) / Ml;
+    Eigen::MatrixXd Cl = Eigen::MatrixXd::Zero(q, q);
+    for (int m : members) Cl += (g.col(m) - mean) * (g.col(m) - mean).transpose();
+    Cl *= static_cast<double>(Ml) / (Ml - 1);
+    C += Cl;
+    shares.emplace_back(Cl.trace(), Ml - 1);
+  }
+  double nu = 0;
+  for (const auto& [trace, dof] : shares) nu += trace > 0.01 * C.trace() ? dof : 0;
+  if (nu < q + 1) {
+    t.why_not = "too few independent clusters (" + std::to_string(M) +
+                ") for a covariance of its score";
+    return t;
+  }
   // Sign convention: r = model - measured, so the step that lowers r^T r is -S^-1 G.
   const Eigen::VectorXd G = g.rowwise().sum();
   const Eigen::LDLT<Eigen::MatrixXd> S_ldlt(S);
   t.step = -S_ldlt.solve(G);
   t.predicted_rss_drop = G.dot(S_ldlt.solve(G));
-  const Eigen::VectorXd mean = G / M;
-  const Eigen::MatrixXd centred = g.colwise() - mean;
-  const Eigen::MatrixXd C = centred * centred.transpose() / (M - 1);
   const Eigen::LDLT<Eigen::MatrixXd> C_ldlt(C);
   double T2;
   if (values == nullptr) {
-    T2 = M * mean.dot(C_ldlt.solve(mean));
+    T2 = G.dot(C_ldlt.solve(G));
   } else {
-    // Cov(delta) = S^-1 (M C) S^-1, so T^2 = delta^T S (M C)^-1 S delta.
     const Eigen::VectorXd s_delta = S * *values;
-    T2 = s_delta.dot(C_ldlt.solve(s_delta)) / M;
+    T2 = s_delta.dot(C_ldlt.solve(s_delta));
   }
   if (!std::isfinite(T2) || C_ldlt.info() != Eigen::Success) {
     t.why_not = "the covariance of its score is singular";
     return t;
   }
   t.ok = true;
-  t.statistic = std::max(0.0, T2 * (M - q) / (q * (M - 1.0)));
-  t.p_value = FSurvival(t.statistic, q, M - q);
+  t.statistic = std::max(0.0, T2 * (nu - q + 1) / (q * nu));
+  t.p_value = FSurvival(t.statistic, q, nu - q + 1);
+  t.covariance_dof = nu;
   const int dof = std::max(1, fit_.num_residuals - static_cast<int>(nuisance_.size()) - q);
   const double sigma2 = fit_.rss / dof;
   t.white_statistic = values == nullptr ? t.predicted_rss_drop / q / sigma2

@@ -9,9 +9,11 @@
 // (scaled, value / scale), this holds
 //   N = J^T J,   b = J^T r,   and b_c = J_c^T r_c for every cluster c,
 // a cluster being a group of residuals taken as independent of the others
-// (the unit of the cluster-robust covariance of the score): one
-// multiple-shooting segment of a flight log with its continuity tie, one
-// constant-input hold of a balance log. Candidate effects enter as extra free
+// (the unit of the cluster-robust covariance of the score): a run of
+// consecutive rows of a flight log, a few times longer than the correlation
+// time of its residuals (ClusterRows) and never straddling a
+// multiple-shooting segment (a segment's continuity tie goes with its last
+// cluster); one constant-input hold of a balance log. Each log is a stratum. Candidate effects enter as extra free
 // parameters at the values where they are absent, so r is the fit's own
 // residual and their columns are the candidate's output sensitivities along
 // the fitted trajectory (CVODES, the same costs as the fit).
@@ -37,6 +39,7 @@ struct LinearisedFit {
   Eigen::VectorXd gradient;                 // b = J^T r
   std::vector<Eigen::VectorXd> cluster_gradients;  // b_c per cluster
   std::vector<int> cluster_residuals;       // residuals per cluster
+  std::vector<int> cluster_strata;          // log index of each cluster
   double rss = 0;                           // r^T r
   int num_residuals = 0;
 
@@ -49,28 +52,43 @@ struct LinearisedFit {
 // vehicle's parameter values and the fitted flight segments (one
 // FittedSegments per log, empty for balance logs; from OutputErrorResult).
 // False with the reason if a segment cannot be simulated.
+// cluster_rows: rows per cluster of each flight log (ignored for balance logs).
 bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
                   const std::vector<FittedSegments>& segments, const NoiseWeights& noise,
-                  const OutputErrorOptions& options, LinearisedFit* out, std::string* why);
+                  const std::vector<int>& cluster_rows, const OutputErrorOptions& options,
+                  LinearisedFit* out, std::string* why);
+
+// Rows per cluster for a flight log whose model outputs are `prediction`:
+// three times the largest integrated autocorrelation time of its channels'
+// residuals, tau = 1 + 2 sum_l rho_l (summed while rho_l > 0, up to 200
+// lags), at least 10 rows. Adjacent clusters' scores then correlate by a
+// few percent at most (for an AR(1) residual, ~tau / (4 n)).
+int ClusterRows(const EstimationLog& log, const Eigen::MatrixXd& prediction);
 
 // A group of columns tested against the others of a linearised fit, the
 // nuisance columns (those already estimated) projected out:
 //   Z~ = Z - J_0 (J_0^T J_0)^+ J_0^T Z,  g_c = Z~_c^T r_c (cluster scores),
 //   G = sum_c g_c = Z~^T r,  S = Z~^T Z~ = N_ZZ - N_Z0 N_00^+ N_0Z.
-// Score test (the group at zero, i.e. absent): with the M cluster scores'
-// centred covariance C, Hotelling's T^2 = M gbar^T C^-1 gbar and
-//   F = (M - q) / (q (M - 1)) T^2 ~ F(q, M - q)
-// (exact for independent Gaussian cluster scores; valid whatever the
-// correlation of the residuals within a cluster, hence honest on coloured
-// flight residuals). The Gauss-Newton step of the nested model is
-// delta = S^-1 G, its predicted drop of the RSS G^T S^-1 G; the white-noise
-// score statistic (G^T S^-1 G / q) / (RSS / (N - P)) is kept for comparison.
+// Score test (the group at zero, i.e. absent): Hotelling's T^2 with the
+// covariance of G estimated from the cluster scores, centred within each
+// stratum (log) l of M_l clusters,
+//   C = sum_l M_l / (M_l - 1) sum_{c in l} (g_c - gbar_l)(g_c - gbar_l)^T,
+//   T^2 = G^T C^-1 G,   F = (nu - q + 1) / (q nu) T^2 ~ F(q, nu - q + 1),
+// nu = sum of (M_l - 1) over the strata that carry the score (> 1 % of
+// trace C). With one stratum this is the one-sample Hotelling test, exact
+// for independent Gaussian cluster scores whatever the correlation of the
+// residuals within a cluster: it stays honest on coloured flight residuals.
+// The Gauss-Newton step of the nested model is delta = -S^-1 G (r = model -
+// measured), its predicted drop of the RSS G^T S^-1 G; the white-noise score
+// statistic (G^T S^-1 G / q) / (RSS / (N - P)) is kept for comparison.
 // Wald test (the group present at `values_scaled`, after a refit): the same
-// F with T^2 = M delta^T (S^-1 C S^-1)^-1 delta, delta = values_scaled.
+// F with T^2 = delta^T S C^-1 S delta, delta = values_scaled (the sandwich
+// Cov(delta) = S^-1 C S^-1).
 struct ColumnTest {
   bool ok = false;
   std::string why_not;           // not ok: e.g. "explained by the parameters already estimated"
   int q = 0, clusters = 0;
+  double covariance_dof = 0;     // nu
   double statistic = 0;          // cluster-robust F(q, M - q)
   double p_value = 1;
   double white_statistic = 0;    // white-noise score F(q, N - P)

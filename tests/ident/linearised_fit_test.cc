@@ -39,6 +39,7 @@ LinearisedFit Linearise(const Eigen::MatrixXd& J0, const Eigen::MatrixXd& Z,
     const int rows = std::min<int>(cluster, J.rows() - first);
     f.cluster_gradients.push_back(J.middleRows(first, rows).transpose() * r.segment(first, rows));
     f.cluster_residuals.push_back(rows);
+    f.cluster_strata.push_back(0);
   }
   f.rss = r.squaredNorm();
   f.num_residuals = static_cast<int>(r.size());
@@ -67,7 +68,7 @@ TEST(LinearisedFit, ScoreStepIsTheNestedLeastSquaresFit) {
   EXPECT_NEAR(t.step[0], full[2], 1e-9);
   const Eigen::VectorXd r1 = J * full - y;
   EXPECT_NEAR(t.predicted_rss_drop, f.rss - r1.squaredNorm(), 1e-9 * f.rss);
-  // The cluster-robust p is bounded by its M - q = 29 degrees of freedom
+  // The cluster-robust p is bounded by its nu - q + 1 = 29 degrees of freedom
   // (F(1, 29) > 23 for p < 1e-4), not by the 600 samples.
   EXPECT_LT(t.p_value, 1e-4);
 }
