@@ -234,14 +234,15 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
        "jointly). Every library effect it lacks is scored by the score test of the nested model "
        "linearised at the fit: the candidate's output sensitivities along the fitted trajectory "
        "(CVODES), with the directions already estimated (segment states, parameters) projected "
-       "out. Its p-value is cluster-robust (Hotelling T^2 over the multiple-shooting segments "
-       "and balance holds, F(q, M - q)), so autocorrelated flight residuals do not make false "
+       "out. Its p-value is cluster-robust (Hotelling T^2 over clusters of flight rows three "
+       "times the residual correlation time long and over balance holds, centred per log), so "
+       "autocorrelated flight residuals do not make false "
        "alarms; the white-noise p is shown for comparison. p-values are Holm-corrected over the "
        "candidates tested in a round. The best passing candidate is refitted jointly and kept "
        "only if the cluster-robust Wald test of its parameters at the refit passes. Whiteness: "
        "Ljung-Box, p-value from the regularized incomplete gamma function. A channel is reported "
-       "unexplained when its Ljung-Box p is below alpha and its rms exceeds 1.5 times its "
-       "sample-to-sample noise.\n";
+       "unexplained when it is structured (Ljung-Box p below alpha, or a mean offset beyond its "
+       "noise) and its rms exceeds 1.5 times its sample-to-sample noise.\n";
   return o.str();
 }
 
@@ -262,6 +263,7 @@ int RunDiscover() {
   options.fit.segment_schedule_s = {std::min(0.25, FLAGS_segment_s), FLAGS_segment_s};
   if (FLAGS_segment_s <= 0.25) options.fit.segment_schedule_s = {FLAGS_segment_s};
   options.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  options.fit.progress = options.progress;
   std::string why;
   if (!options.IsValid(&why)) throw InputError("discover: " + why);
 

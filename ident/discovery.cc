@@ -187,9 +187,10 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                                 : Snapshot(current, fit, estimation, validation, options);
 
   for (const ChannelResidualTest& t : out.final.residual_tests) {
-    if (!(t.ljung_box_p < options.alpha && t.rms > options.unexplained_rms_ratio * t.noise_std)) {
-      continue;
-    }
+    // Structured: autocorrelated (Ljung-Box, which removes the mean), or
+    // offset by more than its noise; and well above its noise either way.
+    const bool structured = t.ljung_box_p < options.alpha || std::fabs(t.mean) > t.noise_std;
+    if (!(structured && t.rms > options.unexplained_rms_ratio * t.noise_std)) continue;
     UnexplainedChannel u;
     u.channel = t.channel;
     u.ljung_box_p = t.ljung_box_p;
@@ -201,10 +202,10 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     }
     char text[512];
     std::snprintf(text, sizeof(text),
-                  "residual still structured (Ljung-Box p = %.2g, rms %.3g = %.1f x its "
-                  "sample-to-sample noise %.3g); strongest correlation: %s (r = %.2f); no "
+                  "residual still structured (Ljung-Box p = %.2g, mean %.3g, rms %.3g = %.1f x "
+                  "its sample-to-sample noise %.3g); strongest correlation: %s (r = %.2f); no "
                   "effect in the library passes for it",
-                  t.ljung_box_p, t.rms, t.noise_std > 0 ? t.rms / t.noise_std : INFINITY,
+                  t.ljung_box_p, t.mean, t.rms, t.noise_std > 0 ? t.rms / t.noise_std : INFINITY,
                   t.noise_std, u.correlates_with.c_str(), u.correlation);
     u.why = text;
     u.generic = SearchChannelDictionary(estimation, out.final.result.predictions, t.channel,

@@ -2,7 +2,8 @@
 // model, analyse its residuals, score every library effect it lacks, add the
 // best one that passes a corrected test, refit everything jointly, and repeat
 // until none passes. A channel whose residual stays structured (Ljung-Box p
-// below alpha and rms clearly above its sample-to-sample noise) with no
+// below alpha, or a mean offset beyond its noise; and rms clearly above its
+// sample-to-sample noise) with no
 // candidate left to explain it is reported as unexplained, with what it
 // correlates with. Never adds a candidate that does not pass.
 #pragma once

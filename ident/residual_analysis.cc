@@ -121,6 +121,7 @@ nlohmann::json ChannelResidualTest::ToJson() const {
   for (const Correlation& c : correlations) corr[c.with] = c.r;
   return {{"count", count},
           {"rms", rms},
+          {"mean", mean},
           {"noise_std", noise_std},
           {"ljung_box_q", ljung_box_q},
           {"ljung_box_lags", ljung_box_lags},
@@ -199,6 +200,7 @@ std::vector<ChannelResidualTest> AnalyseResiduals(const std::vector<EstimationLo
     double mean = 0, ss = 0;
     for (double v : e) mean += v, ss += v * v;
     mean /= n;
+    t.mean = mean;
     t.rms = std::sqrt(ss / n);
     std::vector<double> diffs;
     for (int k = 1; k < n; ++k) diffs.push_back(std::fabs(e[k] - e[k - 1]));

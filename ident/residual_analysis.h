@@ -39,6 +39,7 @@ struct ChannelResidualTest {
   std::string channel;
   int count = 0;                      // finite residuals used
   double rms = 0;                     // rms of the residual
+  double mean = 0;                    // its mean (an offset, which Ljung-Box does not see)
   double noise_std = 0;               // sample-to-sample noise estimate (robust first differences)
   std::vector<double> autocorrelation;  // lags 0..lags
   double ljung_box_q = 0;
