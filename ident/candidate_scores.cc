@@ -143,6 +143,7 @@ nlohmann::json CandidateScore::ToJson() const {
       {"white_noise_p_value", white_p_value},
       {"rss_before", rss_before},
       {"rss_after", rss_after},
+      {"bic_change", bic_change},
       {"num_residuals", num_residuals},
       {"num_free_parameters", num_free_parameters}};
   if (!testable) j["why_not_testable"] = why_not_testable;
@@ -282,6 +283,7 @@ std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
     s.white_statistic = t.white_statistic;
     s.white_p_value = t.white_p_value;
     s.rss_after = rss0 - t.predicted_rss_drop;
+    s.bic_change = s.num_parameters * std::log(static_cast<double>(n0)) - t.predicted_rss_drop;
     for (size_t k = 0; k < names.size(); ++k) {
       const int column = lin.ParameterColumn(names[k]) - lin.num_state_columns;
       s.linearised_estimates[names[k]] =
@@ -294,6 +296,10 @@ std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
                    [](const CandidateScore& a, const CandidateScore& b) {
                      if (a.passes != b.passes) return a.passes;
                      if (a.testable != b.testable) return a.testable;
+                     // Among passing candidates the cluster-robust p saturates at a
+                     // few clusters' worth of evidence: the best is the one that
+                     // explains the most of the residual for its parameters.
+                     if (a.passes && a.bic_change != b.bic_change) return a.bic_change < b.bic_change;
                      if (a.p_value != b.p_value) return a.p_value < b.p_value;
                      return a.statistic > b.statistic;
                    });
@@ -315,10 +321,6 @@ bool ConfirmCandidate(const CandidatePass& pass, const std::vector<EstimationLog
   OutputErrorOptions o = fit_options;
   o.noise = pass.fit.noise;
   o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
-  // Stop when an iteration changes the cost by less than 1e-6 of itself: one
-  // std of any parameter changes it by 0.5 / cost (3e-5 of a 15000 cost, 10 s
-  // of flight), and the last iterations of a warm refit crawl far below that.
-  o.function_tolerance = std::max(o.function_tolerance, 1e-6);
   const OutputErrorResult refit = FitOutputError(candidate, logs, o);
   if (!refit.usable) {
     score->why_not_confirmed = "the joint refit failed: " + refit.why_not_usable;

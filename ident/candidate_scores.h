@@ -45,6 +45,7 @@ struct CandidateScore {
   std::string reason;                 // the physical reason it would show in those channels
   int num_parameters = 0;
   double rss_before = 0, rss_after = 0;  // after: predicted by the linearisation (or the refit)
+  double bic_change = 0;              // predicted: q ln N - (rss_before - rss_after)
   int num_residuals = 0, num_free_parameters = 0;
   int clusters = 0;                   // clusters of the robust test
   double covariance_dof = 0;          // nu of its score covariance
@@ -86,8 +87,9 @@ CandidatePass LinearisePass(const Vehicle& fitted, const OutputErrorResult& fit,
                             const std::vector<EstimationLog>& logs,
                             const OutputErrorOptions& fit_options);
 
-// Scores every candidate of the pass. Sorted: passing first, then by p-value,
-// then by statistic.
+// Scores every candidate of the pass. Sorted: passing first, best first (the
+// largest fall of the BIC the linearisation predicts, q ln N - drop of the
+// weighted RSS), then the others by p-value.
 std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
                                             const std::vector<EstimationLog>& logs,
                                             double alpha, int round);

@@ -1,5 +1,6 @@
 #include "ident/discovery.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -98,6 +99,10 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
     return false;
   }
   if (!dictionary.IsValid(why)) return false;
+  if (!(fit_function_tolerance > 0 && fit_function_tolerance < 1)) {
+    *why = "fit_function_tolerance must be in (0, 1)";
+    return false;
+  }
   if (residuals.lags < 1) {
     *why = "residual lags must be >= 1";
     return false;
@@ -134,15 +139,17 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   if (!options.IsValid(&why)) throw InputError("discover options: " + why);
   if (estimation.empty()) throw InputError("discover: no estimation log");
   DiscoveryResult out;
+  DiscoveryOptions o = options;
+  o.fit.function_tolerance = std::max(o.fit.function_tolerance, o.fit_function_tolerance);
 
   Say(options, "discover: fitting the declared model (" +
                    std::to_string(declared.parameters.FreeIndices().size()) + " free parameters)");
-  OutputErrorResult fit = FitOrThrow(declared, estimation, options.fit, "the declared model's fit");
+  OutputErrorResult fit = FitOrThrow(declared, estimation, o.fit, "the declared model's fit");
   Vehicle current = declared;
   current.parameters = fit.parameters;
   out.baseline = Snapshot(current, fit, estimation, validation, options);
 
-  CandidatePass pass = LinearisePass(current, fit, estimation, options.fit);
+  CandidatePass pass = LinearisePass(current, fit, estimation, o.fit);
   Say(options, "discover: sensitivities of " + std::to_string(pass.candidates.size()) +
                    " candidate effects along the fit: " + Elapsed(pass.seconds));
   for (int round = 1; round <= options.max_added + 1; ++round) {
@@ -167,7 +174,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         Say(options, "discover: confirming " + s.effect + " by a joint refit (" +
                          Elapsed(Seconds(start)) + " so far)");
         CandidatePass next;
-        if (ConfirmCandidate(pass, estimation, options.fit, options.alpha, &s, &next)) {
+        if (ConfirmCandidate(pass, estimation, o.fit, options.alpha, &s, &next)) {
           Say(options, "discover: added " + s.effect + " (Wald p = " +
                            Number(s.wald_p_value) + ")");
           pass = std::move(next);
