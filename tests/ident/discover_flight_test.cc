@@ -162,8 +162,8 @@ TEST(DiscoverFlight, RotorDragIsTakenByTheBodyDragNotByAWrongEffect) {
 
 TEST(DiscoverFlight, TwoEffectsAreBothFound) {
   const FlightRun run = DiscoverInFlight(
-      {{"gyroscopic", {{"J_r", Value(1e-4)}}}, {"wind", {{"wn", Value(1.0)}, {"we", Value(-0.8)}}}},
-      false, 71, 2.5);
+      {{"gyroscopic", {{"J_r", Value(3e-4)}}}, {"wind", {{"wn", Value(0.6)}, {"we", Value(-0.5)}}}},
+      false, 71, 2.5, 14);
   std::vector<std::string> added = run.result.added;
   std::sort(added.begin(), added.end());
   EXPECT_EQ(added, (std::vector<std::string>{"gyroscopic", "wind"}));
