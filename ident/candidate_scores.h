@@ -10,8 +10,8 @@
 // the weighted residuals on its columns with every direction already
 // estimated (segment states, current parameters) projected out, the
 // Gauss-Newton step of the model with it. The p-value comes from the
-// cluster-robust (Hotelling) form of the test, clusters being the
-// multiple-shooting segments of flight logs and the holds of balance logs, so
+// cluster-robust (Hotelling) form of the test, clusters being runs of flight
+// rows three residual correlation times long and the holds of balance logs, so
 // autocorrelated flight residuals do not inflate it the way the white-noise
 // F-test does (kept in the table for comparison). p-values are corrected for
 // the candidates tried with Holm's step-down method (family-wise error rate
