@@ -102,8 +102,25 @@ struct Assembly {
   std::unique_ptr<ceres::Problem> problem;
   std::vector<FittedSegments> segments;                       // per log
   std::vector<std::vector<FlightSegmentCost*>> segment_costs;  // per log
+  std::vector<std::vector<BalanceRowsCost*>> balance_costs;    // per log
   std::vector<double*> state_blocks;                          // every segment state block
 };
+
+std::vector<double> ChannelStd(const EstimationLog& log, const NoiseWeights& noise) {
+  std::vector<double> channel_std;
+  for (const std::string& name : log.channel_names) channel_std.push_back(noise.For(name));
+  return channel_std;
+}
+
+// New residual weights in an assembled problem (the output-error relaxation):
+// same residual blocks, so their last simulations are reused.
+void SetNoise(const std::vector<EstimationLog>& logs, const NoiseWeights& noise, Assembly* a) {
+  for (size_t i = 0; i < logs.size(); ++i) {
+    const std::vector<double> channel_std = ChannelStd(logs[i], noise);
+    for (FlightSegmentCost* cost : a->segment_costs[i]) cost->SetChannelStd(channel_std);
+    for (BalanceRowsCost* cost : a->balance_costs[i]) cost->SetChannelStd(channel_std);
+  }
+}
 
 }  // namespace
 
@@ -142,7 +159,8 @@ template <typename StartState>
 Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
                   const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
                   double segment_s, const OutputErrorOptions& options, double* theta_scaled,
-                  StartState start_state, bool tie_segments = true) {
+                  StartState start_state, bool tie_segments = true,
+                  SegmentCostTimes* times = nullptr) {
   Assembly a;
   ceres::Problem::Options problem_options;
   problem_options.enable_fast_removal = false;
@@ -156,10 +174,10 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
   ceres::LossFunction* loss = nullptr;  // owned per residual block below
   a.segments.resize(logs.size());
   a.segment_costs.resize(logs.size());
+  a.balance_costs.resize(logs.size());
   for (size_t i = 0; i < logs.size(); ++i) {
     const EstimationLog& log = logs[i];
-    std::vector<double> channel_std;
-    for (const std::string& name : log.channel_names) channel_std.push_back(noise.For(name));
+    const std::vector<double> channel_std = ChannelStd(log, noise);
     if (log.kind == LogKind::kBalance) {
       for (int first = 0; first < log.NumRows();) {
         int end = std::min(log.NumRows(), first + options.balance_rows_per_block);
@@ -173,6 +191,7 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
         }
         loss = options.huber_threshold > 0 ? new ceres::HuberLoss(options.huber_threshold) : nullptr;
         a.problem->AddResidualBlock(cost, loss, theta_scaled);
+        a.balance_costs[i].push_back(cost);
       }
       continue;
     }
@@ -193,6 +212,7 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
       const int last = j + 1 < seg.starts.size() ? seg.starts[j + 1] : log.NumRows() - 1;
       auto* cost = new FlightSegmentCost(vehicle.model, free, log, seg.starts[j], last, has_next,
                                          channel_std, options.continuity_std, options.integrator);
+      cost->set_times(times);
       a.segment_costs[i].push_back(cost);
       // The Huber loss would also soften continuity; it is meant for outliers in outputs, and
       // continuity residuals are near zero at any solution, so the distortion is nil.
@@ -321,52 +341,68 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
   solver_options.gradient_tolerance = options.gradient_tolerance;
   solver_options.logging_type = ceres::SILENT;
   solver_options.update_state_every_iteration = false;
+  // The bounds make Ceres run a projected line search on every trust-region
+  // step (ParameterBlock::Plus projects onto the bounds in any case). With
+  // cubic interpolation it evaluates the gradient, i.e. a full pass with
+  // sensitivities, at every trial point, and near the solution it backtracks
+  // on cost differences at the integrator's noise level. One cost evaluation
+  // of the full step, no gradient (it is the trial point the trust region
+  // evaluates next: the segments' cache serves it); the trust region decides.
+  solver_options.line_search_interpolation_type = ceres::BISECTION;
+  solver_options.max_num_line_search_step_size_iterations = 1;
 
   Assembly previous;
   bool have_previous = false;
   std::vector<Eigen::MatrixXd> previous_predictions;
   double integration_seconds = 0;
+  SegmentCostTimes times;
+  nlohmann::json stage_timing = nlohmann::json::array();
   const int num_stages =
       static_cast<int>(options.segment_schedule_s.size()) + options.noise_relaxations;
   for (int stage = 0; stage < num_stages; ++stage) {
     const int schedule_index =
         std::min(stage, static_cast<int>(options.segment_schedule_s.size()) - 1);
     const double segment_s = options.segment_schedule_s[schedule_index];
-    if (stage >= static_cast<int>(options.segment_schedule_s.size())) {
-      // Output-error relaxation: new weights from the last solve's residuals.
+    const bool relaxation = stage >= static_cast<int>(options.segment_schedule_s.size());
+    const bool coarse = stage + 1 < static_cast<int>(options.segment_schedule_s.size());
+    Assembly a;
+    if (relaxation) {
+      // Output-error relaxation: new weights from the last solve's residuals,
+      // the same problem solved again from its solution.
       std::vector<Eigen::MatrixXd> residuals;
       for (size_t i = 0; i < logs.size(); ++i) {
         residuals.push_back(logs[i].values - previous_predictions[i]);
       }
       noise = NoiseFromResiduals(logs, residuals);
+      a = std::move(previous);
+      SetNoise(logs, noise, &a);
+    } else {
+      // Segment start states: measured at the first stage, then the previous
+      // solve's trajectory at the new boundaries.
+      auto start_state = [&](size_t log_index, int row) -> Eigen::VectorXd {
+        if (!have_previous) return InitialStateFromLog(logs[log_index], row);
+        const auto& seg = previous.segments[log_index];
+        const auto& costs = previous.segment_costs[log_index];
+        int j = static_cast<int>(std::upper_bound(seg.starts.begin(), seg.starts.end(), row) -
+                                 seg.starts.begin()) - 1;
+        j = std::max(j, 0);
+        if (seg.starts[j] == row) return seg.states[j];
+        std::vector<Eigen::VectorXd> outputs;
+        Eigen::VectorXd end_state;
+        if (costs[j]->Predict(seg.states[j].data(), theta_scaled.data(), &outputs, &end_state) &&
+            row - seg.starts[j] < static_cast<int>(outputs.size())) {
+          return outputs[row - seg.starts[j]].head(kNumStates);
+        }
+        return InitialStateFromLog(logs[log_index], row);
+      };
+      OutputErrorOptions stage_options = options;
+      if (coarse) stage_options.continuity_std = options.coarse_continuity_std;
+      a = Assemble(vehicle, free, logs, noise, segment_s, stage_options, theta_scaled.data(),
+                   start_state, /*tie_segments=*/true, &times);
     }
-    // Segment start states: measured at the first stage, then the previous
-    // solve's trajectory at the new boundaries.
-    auto start_state = [&](size_t log_index, int row) -> Eigen::VectorXd {
-      if (!have_previous) return InitialStateFromLog(logs[log_index], row);
-      const auto& seg = previous.segments[log_index];
-      const auto& costs = previous.segment_costs[log_index];
-      int j = static_cast<int>(std::upper_bound(seg.starts.begin(), seg.starts.end(), row) -
-                               seg.starts.begin()) - 1;
-      j = std::max(j, 0);
-      if (seg.starts[j] == row) return seg.states[j];
-      std::vector<Eigen::VectorXd> outputs;
-      Eigen::VectorXd end_state;
-      if (costs[j]->Predict(seg.states[j].data(), theta_scaled.data(), &outputs, &end_state) &&
-          row - seg.starts[j] < static_cast<int>(outputs.size())) {
-        return outputs[row - seg.starts[j]].head(kNumStates);
-      }
-      return InitialStateFromLog(logs[log_index], row);
-    };
-    const bool coarse_stage = stage + 1 < static_cast<int>(options.segment_schedule_s.size());
-    OutputErrorOptions stage_options = options;
-    if (coarse_stage) stage_options.continuity_std = options.coarse_continuity_std;
-    Assembly a = Assemble(vehicle, free, logs, noise, segment_s, stage_options,
-                          theta_scaled.data(), start_state);
     char stage_name[96];
     std::snprintf(stage_name, sizeof stage_name, "output-error stage %d/%d (segments %.2f s)",
                   stage + 1, num_stages, segment_s);
-    const bool coarse = stage + 1 < static_cast<int>(options.segment_schedule_s.size());
     solver_options.max_num_iterations =
         coarse ? options.coarse_max_iterations : options.max_iterations;
     solver_options.function_tolerance =
@@ -377,6 +413,14 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
     const auto solve_start = Clock::now();
     ceres::Solve(solver_options, a.problem.get(), &summary);
     integration_seconds += Since(solve_start);
+    stage_timing.push_back({{"segment_s", segment_s},
+                            {"iterations", summary.iterations.size() - 1},
+                            {"residual_evaluations", summary.num_residual_evaluations},
+                            {"jacobian_evaluations", summary.num_jacobian_evaluations},
+                            {"residual_seconds", summary.residual_evaluation_time_in_seconds},
+                            {"jacobian_seconds", summary.jacobian_evaluation_time_in_seconds},
+                            {"linear_solver_seconds", summary.linear_solver_time_in_seconds},
+                            {"solve_seconds", summary.total_time_in_seconds}});
     if (stage == 0) result.initial_cost = summary.initial_cost;
     result.iterations += summary.iterations.size() > 0 ? summary.iterations.size() - 1 : 0;
     result.final_cost = summary.final_cost;
@@ -409,7 +453,13 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
   result.seconds = Since(start);
   result.timing = {{"solves_seconds", integration_seconds},
                    {"covariance_seconds", Since(covariance_start)},
-                   {"total_seconds", result.seconds}};
+                   {"total_seconds", result.seconds},
+                   {"stages", stage_timing},
+                   {"state_runs", times.state_runs.load()},
+                   {"state_run_thread_seconds", 1e-9 * times.state_ns.load()},
+                   {"sensitivity_runs", times.sensitivity_runs.load()},
+                   {"sensitivity_run_thread_seconds", 1e-9 * times.sensitivity_ns.load()},
+                   {"outputs_thread_seconds", 1e-9 * times.outputs_ns.load()}};
   return result;
 }
 
