@@ -6,8 +6,6 @@
 #include <cstdio>
 #include <memory>
 
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
 #include <ceres/ceres.h>
 #include <glog/logging.h>
 
@@ -15,6 +13,7 @@
 #include "dynamics/outputs.h"
 #include "ident/free_parameters.h"
 #include "ident/output_error_costs.h"
+#include "ident/output_error_information.h"
 
 namespace coaxid {
 
@@ -260,38 +259,19 @@ bool Predict(const Vehicle& vehicle, const FreeParameters& free,
   return true;
 }
 
-// The Fisher information of the free parameters (scaled coordinates) with the
-// segment states marginalised out (Schur complement), from the Jacobian at
-// the solution, evaluated without any robust loss.
-Eigen::MatrixXd MarginalInformation(Assembly& a, double* theta_scaled, int P) {
-  ceres::Problem::EvaluateOptions eval;
-  eval.parameter_blocks.push_back(theta_scaled);
-  for (double* b : a.state_blocks) eval.parameter_blocks.push_back(b);
-  eval.apply_loss_function = false;
-  eval.num_threads = 2;
-  ceres::CRSMatrix crs;
-  a.problem->Evaluate(eval, nullptr, nullptr, nullptr, &crs);
-  using Sparse = Eigen::SparseMatrix<double, Eigen::ColMajor>;
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(crs.values.size());
-  for (int r = 0; r < crs.num_rows; ++r) {
-    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) {
-      triplets.emplace_back(r, crs.cols[k], crs.values[k]);
-    }
+// The residual blocks of an assembled problem, for the information.
+std::vector<LogResidualBlocks> ResidualBlocks(const Vehicle& vehicle,
+                                              const std::vector<EstimationLog>& logs,
+                                              const Assembly& a) {
+  std::vector<LogResidualBlocks> out(logs.size());
+  for (size_t i = 0; i < logs.size(); ++i) {
+    out[i].log = &logs[i];
+    out[i].balance.assign(a.balance_costs[i].begin(), a.balance_costs[i].end());
+    out[i].segments.assign(a.segment_costs[i].begin(), a.segment_costs[i].end());
+    for (const Eigen::VectorXd& s : a.segments[i].states) out[i].segment_states.push_back(s.data());
+    if (!out[i].segments.empty()) out[i].held_states = UnobservableStates(logs[i], vehicle.model);
   }
-  Sparse J(crs.num_rows, crs.num_cols);
-  J.setFromTriplets(triplets.begin(), triplets.end());
-  const Sparse H = (J.transpose() * J).pruned();
-  const int n = crs.num_cols;
-  // Parameter block order puts theta's P columns first (no manifold on it).
-  const Eigen::MatrixXd H_tt = Eigen::MatrixXd(H.topLeftCorner(P, P));
-  if (n == P) return H_tt;
-  const Sparse H_ss = H.bottomRightCorner(n - P, n - P);
-  const Eigen::MatrixXd H_st = Eigen::MatrixXd(H.bottomLeftCorner(n - P, P));
-  Eigen::SimplicialLDLT<Sparse> ldlt(H_ss);
-  if (ldlt.info() != Eigen::Success) return H_tt;  // cannot marginalise: conditional info
-  const Eigen::MatrixXd X = ldlt.solve(H_st);
-  return H_tt - H_st.transpose() * X;
+  return out;
 }
 
 }  // namespace
@@ -442,9 +422,10 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
   }
 
   const auto covariance_start = Clock::now();
-  const Eigen::MatrixXd information =
-      MarginalInformation(previous, theta_scaled.data(), free.size());
-  result.identifiability = AnalyzeIdentifiability(information, free.names(), free.scales());
+  const OutputErrorInformation information = ComputeOutputErrorInformation(
+      ResidualBlocks(vehicle, logs, previous), theta_scaled.data(), free.size(), false);
+  result.identifiability =
+      AnalyzeIdentifiability(information.information, free.names(), free.scales());
   free.WriteBack(theta_scaled.data(), &result.parameters);
   result.noise = noise;
   result.segments = previous.segments;

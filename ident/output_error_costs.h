@@ -74,7 +74,18 @@ class FlightSegmentCost : public ceres::CostFunction {
 
   int first() const { return first_; }
   int last() const { return last_; }
+  bool has_next() const { return has_next_; }
   int NumOutputResiduals() const { return static_cast<int>(terms_.size()); }
+
+  // Output residual r of Evaluate is terms()[r]; the continuity residuals
+  // (if has_next) follow them.
+  struct Term {
+    int row;      // log row
+    int column;   // log channel column
+    int channel;  // FlightChannel
+    double weight;
+  };
+  const std::vector<Term>& terms() const { return terms_; }
 
   // The model's outputs (15 flight channels) at rows first..end and the state
   // at `last`, for given segment start state and scaled parameters. False if
@@ -83,12 +94,6 @@ class FlightSegmentCost : public ceres::CostFunction {
                std::vector<Eigen::VectorXd>* outputs, Eigen::VectorXd* end_state) const;
 
  private:
-  struct Term {
-    int row;      // log row
-    int column;   // log channel column
-    int channel;  // FlightChannel
-    double weight;
-  };
   const VehicleModel& model_;
   const FreeParameters& free_;
   const EstimationLog& log_;
