@@ -313,7 +313,14 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
   Eigen::VectorXd theta_scaled = free.ScaledValues();
 
   ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  // Multiple shooting has the structure of bundle adjustment: many small
+  // segment-state blocks, each tied to a few residual blocks, and one shared
+  // parameter block. The Schur solver eliminates an independent set of the
+  // state blocks (Ceres picks it: neighbouring segments share a continuity
+  // residual) instead of forming and factoring the whole J^T J. Measured on
+  // the 60 s fit (bench/output_error_bench): 10 % less main-thread time than
+  // SPARSE_NORMAL_CHOLESKY, same estimates.
+  solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
   solver_options.max_num_iterations = options.max_iterations;
   solver_options.num_threads = options.num_threads;
   solver_options.function_tolerance = options.function_tolerance;
