@@ -36,6 +36,7 @@ bool OutputErrorOptions::IsValid(std::string* why) const {
   if (huber_threshold < 0) return fail("huber_threshold must be >= 0");
   if (num_threads < 1) return fail("num_threads must be >= 1");
   if (balance_rows_per_block < 1) return fail("balance_rows_per_block must be >= 1");
+  if (coloured_max_lag < 1) return fail("coloured_max_lag must be >= 1");
   return integrator.IsValid(why);
 }
 
@@ -276,6 +277,26 @@ std::vector<LogResidualBlocks> ResidualBlocks(const Vehicle& vehicle,
 
 }  // namespace
 
+nlohmann::json OutputErrorResult::ColouredResiduals::ToJson(
+    const std::vector<std::string>& names) const {
+  nlohmann::json out = {{"applied", applied}};
+  if (!applied) return out;
+  nlohmann::json white = nlohmann::json::object(), factors = nlohmann::json::object();
+  auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
+  for (size_t k = 0; k < names.size(); ++k) {
+    white[names[k]] = number(white_std[k]);
+    factors[names[k]] = number(factor[k]);
+  }
+  out["method"] =
+      "Morelli & Klein: M^-1 [sum_k sum_j G_k^T Rvv(k-j) G_j] M^-1 with the residual "
+      "autocorrelation Rvv summed up to the lag where it has died out";
+  out["lags_samples"] = lags;
+  out["white_noise_std"] = white;
+  out["factor"] = factors;
+  out["corrected"] = "parameters.*.std, the covariance and the correlation matrix";
+  return out;
+}
+
 std::map<std::string, FitError> ChannelFitErrors(const std::vector<EstimationLog>& logs,
                                                  const std::vector<Eigen::MatrixXd>& predictions) {
   std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> pooled;
@@ -429,25 +450,58 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
   }
 
   const auto covariance_start = Clock::now();
-  const OutputErrorInformation information = ComputeOutputErrorInformation(
-      ResidualBlocks(vehicle, logs, previous), theta_scaled.data(), free.size(), false);
+  const OutputErrorInformation information =
+      ComputeOutputErrorInformation(ResidualBlocks(vehicle, logs, previous), theta_scaled.data(),
+                                    free.size(), options.coloured_residual_correction);
   result.identifiability =
       AnalyzeIdentifiability(information.information, free.names(), free.scales());
+  if (options.coloured_residual_correction) {
+    IdentifiabilityReport& report = result.identifiability;
+    const Eigen::VectorXd inverse_scales = free.scales().cwiseInverse();
+    const ColouredResidualCorrection corrected = CorrectForColouredResiduals(
+        information,
+        inverse_scales.asDiagonal() * report.covariance * inverse_scales.asDiagonal(),
+        options.coloured_max_lag);
+    OutputErrorResult::ColouredResiduals& coloured = result.coloured_residuals;
+    coloured.applied = true;
+    coloured.white_std = report.std;
+    coloured.lags = corrected.lags;
+    report.SetCovariance(free.scales().asDiagonal() * corrected.covariance_scaled *
+                         free.scales().asDiagonal());
+    coloured.factor = report.std.cwiseQuotient(coloured.white_std);
+  }
   free.WriteBack(theta_scaled.data(), &result.parameters);
   result.noise = noise;
   result.segments = previous.segments;
   result.predictions = previous_predictions;
   result.usable = true;
   result.seconds = Since(start);
-  result.timing = {{"solves_seconds", integration_seconds},
-                   {"covariance_seconds", Since(covariance_start)},
-                   {"total_seconds", result.seconds},
-                   {"stages", stage_timing},
-                   {"state_runs", times.state_runs.load()},
-                   {"state_run_thread_seconds", 1e-9 * times.state_ns.load()},
-                   {"sensitivity_runs", times.sensitivity_runs.load()},
-                   {"sensitivity_run_thread_seconds", 1e-9 * times.sensitivity_ns.load()},
-                   {"outputs_thread_seconds", 1e-9 * times.outputs_ns.load()}};
+  // Wall time by kind: trial-point evaluations (integration of the state),
+  // Jacobian evaluations (integration with sensitivities and the output
+  // Jacobians), linear algebra (Ceres' linear solves and the covariance), and
+  // the rest (problem assembly, predictions, Ceres' bookkeeping).
+  double integration = 0, sensitivities = 0, linear_algebra = Since(covariance_start);
+  for (const nlohmann::json& s : stage_timing) {
+    integration += s["residual_seconds"].get<double>();
+    sensitivities += s["jacobian_seconds"].get<double>();
+    linear_algebra += s["linear_solver_seconds"].get<double>();
+  }
+  result.timing = {
+      {"total_seconds", result.seconds},
+      {"split_seconds",
+       {{"integration", integration},
+        {"sensitivities", sensitivities},
+        {"linear_algebra", linear_algebra},
+        {"other", result.seconds - integration - sensitivities - linear_algebra}}},
+      {"solves_seconds", integration_seconds},
+      {"covariance_seconds", Since(covariance_start)},
+      {"stages", stage_timing},
+      // Summed over the threads that evaluate residual blocks at once.
+      {"state_runs", times.state_runs.load()},
+      {"state_run_thread_seconds", 1e-9 * times.state_ns.load()},
+      {"sensitivity_runs", times.sensitivity_runs.load()},
+      {"sensitivity_run_thread_seconds", 1e-9 * times.sensitivity_ns.load()},
+      {"outputs_thread_seconds", 1e-9 * times.outputs_ns.load()}};
   return result;
 }
 

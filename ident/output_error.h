@@ -50,6 +50,11 @@ struct OutputErrorOptions {
   double coarse_continuity_std = 1e-2;
   // > 0: Huber loss on the output residuals at this many std (robust fit).
   double huber_threshold = 0;
+  // Correct the Cramér-Rao bounds for autocorrelated output residuals
+  // (Morelli & Klein; ident/output_error_information.h), summing the
+  // residual correlation up to coloured_max_lag samples at most.
+  bool coloured_residual_correction = false;
+  int coloured_max_lag = 200;
   IntegratorOptions integrator = DefaultIntegrator();
   int num_threads = 2;
   int balance_rows_per_block = 512;
@@ -89,6 +94,16 @@ struct OutputErrorResult {
   // started from its fitted state; balance, the static model. Same shape as
   // each log's values.
   std::vector<Eigen::MatrixXd> predictions;
+  // With coloured_residual_correction: the white-noise std, the truncation
+  // lag per flight log and corrected std / white std per parameter (the
+  // identifiability report then holds the corrected std and covariance).
+  struct ColouredResiduals {
+    bool applied = false;
+    Eigen::VectorXd white_std;
+    Eigen::VectorXd factor;
+    std::vector<int> lags;
+    nlohmann::json ToJson(const std::vector<std::string>& names) const;
+  } coloured_residuals;
   int iterations = 0;
   double initial_cost = 0, final_cost = 0;
   std::string termination;                  // Ceres' reason for stopping
