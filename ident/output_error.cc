@@ -37,7 +37,7 @@ bool OutputErrorOptions::IsValid(std::string* why) const {
   if (num_threads < 1) return fail("num_threads must be >= 1");
   if (balance_rows_per_block < 1) return fail("balance_rows_per_block must be >= 1");
   if (coloured_max_lag < 1) return fail("coloured_max_lag must be >= 1");
-  return integrator.IsValid(why);
+  return integrator.IsValid(why) && coarse_integrator.IsValid(why);
 }
 
 namespace {
@@ -404,7 +404,10 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
         return InitialStateFromLog(logs[log_index], row);
       };
       OutputErrorOptions stage_options = options;
-      if (coarse) stage_options.continuity_std = options.coarse_continuity_std;
+      if (coarse) {
+        stage_options.continuity_std = options.coarse_continuity_std;
+        stage_options.integrator = options.coarse_integrator;
+      }
       a = Assemble(vehicle, free, logs, noise, segment_s, stage_options, theta_scaled.data(),
                    start_state, /*tie_segments=*/true, &times);
     }
