@@ -41,19 +41,26 @@ bool AutodiffJacobian(const F& f, const Eigen::VectorXd& theta, const double* x,
   if (dydx) dydx->resize(ny, nx);
   if (dydp) dydp->resize(ny, np_dirs);
 
-  std::vector<Jet> theta_jet(theta.size()), x_jet(nx), y_jet(ny);
+  // Per-thread scratch (this runs inside integrator right-hand sides, several
+  // times per step: allocating here was ~5 % of an output-error fit). Every
+  // jet is set once; each pass seeds its directions and clears them after.
+  thread_local std::vector<Jet> theta_jet, x_jet, y_jet;
+  theta_jet.resize(theta.size());
+  x_jet.resize(nx);
+  y_jet.resize(ny);
+  for (int i = 0; i < theta.size(); ++i) theta_jet[i] = Jet(theta[i]);
+  for (int i = 0; i < nx; ++i) x_jet[i] = Jet(x[i]);
+  auto seed = [&](int dir, int first, double value) {
+    if (dir < nx_dirs) {
+      x_jet[dir].v[dir - first] = value;
+    } else {
+      theta_jet[parameter_indices[dir - nx_dirs]].v[dir - first] = value;
+    }
+  };
   int first = 0;
   do {  // at least one pass, also to compute y when no derivative is asked
-    for (int i = 0; i < theta.size(); ++i) theta_jet[i] = Jet(theta[i]);
-    for (int i = 0; i < nx; ++i) x_jet[i] = Jet(x[i]);
     const int last = std::min(first + kAutodiffChunk, num_directions);
-    for (int dir = first; dir < last; ++dir) {
-      if (dir < nx_dirs) {
-        x_jet[dir].v[dir - first] = 1.0;
-      } else {
-        theta_jet[parameter_indices[dir - nx_dirs]].v[dir - first] = 1.0;
-      }
-    }
+    for (int dir = first; dir < last; ++dir) seed(dir, first, 1.0);
     f(theta_jet.data(), x_jet.data(), y_jet.data());
     for (int row = 0; row < ny; ++row) {
       if (!std::isfinite(y_jet[row].a)) return false;
@@ -68,6 +75,7 @@ bool AutodiffJacobian(const F& f, const Eigen::VectorXd& theta, const double* x,
         }
       }
     }
+    for (int dir = first; dir < last; ++dir) seed(dir, first, 0.0);
     first = last;
   } while (first < num_directions);
   return true;

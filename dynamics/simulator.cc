@@ -29,17 +29,22 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
                     Trajectory* out) {
   CHECK(first >= 0 && first <= last && last < inputs.size());
   CHECK_EQ(x0.size(), kNumStates);
-  out->times.assign(1, inputs.time(first));
-  out->states.assign(1, x0);
-  out->sensitivities.clear();
+  // Sized once and written in place: a trajectory reused for the next run
+  // (output-error segments keep theirs) allocates nothing.
+  const int samples = last - first + 1;
+  out->times.resize(samples);
+  out->states.resize(samples);
+  out->times[0] = inputs.time(first);
+  out->states[0] = x0;
   const bool with_sensitivities = columns_ > 0;
+  out->sensitivities.resize(with_sensitivities ? samples : 0);
   // The natural initial sensitivities: [I | 0] (initial-state columns come
   // first when carried, SensitivityOptions).
   Eigen::MatrixXd S = Eigen::MatrixXd::Zero(kNumStates, columns_);
   if (sensitivity_options_.wrt_initial_state && columns_ >= kNumStates) {
     S.leftCols(kNumStates).setIdentity();
   }
-  if (with_sensitivities) out->sensitivities.push_back(S);
+  if (with_sensitivities) out->sensitivities[0] = S;
 
   Eigen::VectorXd x = x0;
   Eigen::VectorXd z(variational_ ? variational_->NumStates() : 0);
@@ -68,9 +73,10 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
       error_ = "state not finite at t = " + std::to_string(inputs.time(k + 1)) + " s";
       return false;
     }
-    if (with_sensitivities) out->sensitivities.push_back(S);
-    out->times.push_back(inputs.time(k + 1));
-    out->states.push_back(x);
+    const int i = k + 1 - first;
+    if (with_sensitivities) out->sensitivities[i] = S;
+    out->times[i] = inputs.time(k + 1);
+    out->states[i] = x;
   }
   return true;
 }

@@ -46,6 +46,8 @@ class Simulator {
   // interval at a time, and records the state (and sensitivities) at every
   // sample first..last. Returns false with last_error() if CVODE fails or the
   // state stops being finite (blown-up parameters): never throws or aborts.
+  // *out is then unspecified. Reusing one Trajectory for many runs of the
+  // same length allocates nothing after the first.
   bool Run(const InputHold& inputs, int first, int last, const Eigen::VectorXd& x0,
            Trajectory* out);
 

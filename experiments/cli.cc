@@ -31,7 +31,7 @@ constexpr const char* kUsage =
     "  identify --method=linear_kf|output_error|ekf --logs=A.csv[,B.csv...] --config=F --out=DIR\n"
     "           [--validate=C.csv,...] [--holdout_fraction=0.2]\n"
     "           linear_kf: [--process_noise=0]\n"
-    "           output_error: [--segment_s=1] [--start=config|linear_kf] [--huber=0]\n"
+    "           output_error: [--segment_s=1] [--start=config|linear_kf] [--huber=0] [--coloured_residuals]\n"
     "  discover --logs=A.csv[,B.csv...] --config=F --out=DIR [--validate=C.csv,...]\n"
     "           [--alpha=0.01] [--max_added=4] [--segment_s=1]\n"
     "  import   --format=tmotor28 --in=DIR --out=DIR2\n"

@@ -27,6 +27,9 @@ DEFINE_double(huber, 0.0, "output_error: Huber loss threshold in noise std (0: l
 DEFINE_string(noise_std, "",
               "output_error: given output noise std per channel, e.g. phi:0.003,p:0.01,Z:0.02 "
               "(the others are estimated from the data); with --noise_relaxations=0 they are kept");
+DEFINE_bool(coloured_residuals, false,
+            "output_error: correct the Cramér-Rao std for autocorrelated output residuals "
+            "(Morelli & Klein); report.json says which std and by what factor");
 DEFINE_string(start, "config",
               "output_error: starting values: config, or linear_kf (the paper's baseline on the "
               "balance logs)");
@@ -124,6 +127,7 @@ int RunIdentifyOutputError() {
   if (FLAGS_segment_s <= 0.25) options.segment_schedule_s = {FLAGS_segment_s};
   options.noise_relaxations = FLAGS_noise_relaxations;
   options.huber_threshold = FLAGS_huber;
+  options.coloured_residual_correction = FLAGS_coloured_residuals;
   options.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
   std::string why;
   if (!options.IsValid(&why)) throw InputError("output_error options: " + why);
@@ -221,6 +225,7 @@ int RunIdentifyOutputError() {
                          : FitJson(ChannelFitErrors(split.validation, validation_predictions))},
       {"prediction_window_s", FLAGS_segment_s},
       {"identifiability", result.identifiability.ToJson()},
+      {"coloured_residuals", result.coloured_residuals.ToJson(result.identifiability.names)},
       {"noise_std", noise},
       {"convergence",
        {{"iterations", result.iterations},
@@ -235,7 +240,8 @@ int RunIdentifyOutputError() {
   report["validation"]["description"] = split.description;
   WriteJson(dir + "/report.json", report);
 
-  std::printf("output_error estimates (Cramér-Rao std):\n");
+  std::printf("output_error estimates (Cramér-Rao std%s):\n",
+              result.coloured_residuals.applied ? ", corrected for coloured residuals" : "");
   for (int k = 0; k < static_cast<int>(result.identifiability.names.size()); ++k) {
     const std::string& name = result.identifiability.names[k];
     const double value = result.parameters.Value(name);

@@ -85,21 +85,26 @@ IdentifiabilityReport AnalyzeIdentifiability(const Eigen::MatrixXd& information_
   }
   report.condition_number = smallest_kept > 0 ? largest / smallest_kept : INFINITY;
   const Eigen::MatrixXd S = scales.asDiagonal();
-  report.covariance = S * cov_scaled * S;
-  report.std.resize(P);
-  report.correlation = Eigen::MatrixXd::Constant(P, P, NAN);
+  report.SetCovariance(S * cov_scaled * S);
+  return report;
+}
+
+void IdentifiabilityReport::SetCovariance(const Eigen::MatrixXd& new_covariance) {
+  const int P = static_cast<int>(names.size());
+  CHECK(new_covariance.rows() == P && new_covariance.cols() == P);
+  covariance = new_covariance;
+  std.resize(P);
+  correlation = Eigen::MatrixXd::Constant(P, P, NAN);
   for (int k = 0; k < P; ++k) {
-    report.std[k] = report.identifiable[k] ? std::sqrt(std::max(report.covariance(k, k), 0.0)) : NAN;
+    std[k] = identifiable[k] ? std::sqrt(std::max(covariance(k, k), 0.0)) : NAN;
   }
   for (int a = 0; a < P; ++a) {
     for (int b = 0; b < P; ++b) {
-      if (report.identifiable[a] && report.identifiable[b] && report.std[a] > 0 &&
-          report.std[b] > 0) {
-        report.correlation(a, b) = report.covariance(a, b) / (report.std[a] * report.std[b]);
+      if (identifiable[a] && identifiable[b] && std[a] > 0 && std[b] > 0) {
+        correlation(a, b) = covariance(a, b) / (std[a] * std[b]);
       }
     }
   }
-  return report;
 }
 
 nlohmann::json IdentifiabilityReport::ToJson() const {

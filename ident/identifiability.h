@@ -33,6 +33,11 @@ struct IdentifiabilityReport {
   std::vector<NullDirection> null_directions;
   double condition_number = 0;         // of the information restricted to the identifiable subspace
 
+  // Replaces the covariance (unscaled; e.g. corrected for coloured
+  // residuals) and the std and correlation that follow from it, for the
+  // identifiable parameters.
+  void SetCovariance(const Eigen::MatrixXd& covariance);
+
   nlohmann::json ToJson() const;
 };
 

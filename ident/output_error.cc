@@ -6,8 +6,6 @@
 #include <cstdio>
 #include <memory>
 
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
 #include <ceres/ceres.h>
 #include <glog/logging.h>
 
@@ -15,6 +13,7 @@
 #include "dynamics/outputs.h"
 #include "ident/free_parameters.h"
 #include "ident/output_error_costs.h"
+#include "ident/output_error_information.h"
 
 namespace coaxid {
 
@@ -37,7 +36,8 @@ bool OutputErrorOptions::IsValid(std::string* why) const {
   if (huber_threshold < 0) return fail("huber_threshold must be >= 0");
   if (num_threads < 1) return fail("num_threads must be >= 1");
   if (balance_rows_per_block < 1) return fail("balance_rows_per_block must be >= 1");
-  return integrator.IsValid(why);
+  if (coloured_max_lag < 1) return fail("coloured_max_lag must be >= 1");
+  return integrator.IsValid(why) && coarse_integrator.IsValid(why);
 }
 
 namespace {
@@ -102,8 +102,25 @@ struct Assembly {
   std::unique_ptr<ceres::Problem> problem;
   std::vector<FittedSegments> segments;                       // per log
   std::vector<std::vector<FlightSegmentCost*>> segment_costs;  // per log
+  std::vector<std::vector<BalanceRowsCost*>> balance_costs;    // per log
   std::vector<double*> state_blocks;                          // every segment state block
 };
+
+std::vector<double> ChannelStd(const EstimationLog& log, const NoiseWeights& noise) {
+  std::vector<double> channel_std;
+  for (const std::string& name : log.channel_names) channel_std.push_back(noise.For(name));
+  return channel_std;
+}
+
+// New residual weights in an assembled problem (the output-error relaxation):
+// same residual blocks, so their last simulations are reused.
+void SetNoise(const std::vector<EstimationLog>& logs, const NoiseWeights& noise, Assembly* a) {
+  for (size_t i = 0; i < logs.size(); ++i) {
+    const std::vector<double> channel_std = ChannelStd(logs[i], noise);
+    for (FlightSegmentCost* cost : a->segment_costs[i]) cost->SetChannelStd(channel_std);
+    for (BalanceRowsCost* cost : a->balance_costs[i]) cost->SetChannelStd(channel_std);
+  }
+}
 
 }  // namespace
 
@@ -142,7 +159,8 @@ template <typename StartState>
 Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
                   const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
                   double segment_s, const OutputErrorOptions& options, double* theta_scaled,
-                  StartState start_state, bool tie_segments = true) {
+                  StartState start_state, bool tie_segments = true,
+                  SegmentCostTimes* times = nullptr) {
   Assembly a;
   ceres::Problem::Options problem_options;
   problem_options.enable_fast_removal = false;
@@ -156,10 +174,10 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
   ceres::LossFunction* loss = nullptr;  // owned per residual block below
   a.segments.resize(logs.size());
   a.segment_costs.resize(logs.size());
+  a.balance_costs.resize(logs.size());
   for (size_t i = 0; i < logs.size(); ++i) {
     const EstimationLog& log = logs[i];
-    std::vector<double> channel_std;
-    for (const std::string& name : log.channel_names) channel_std.push_back(noise.For(name));
+    const std::vector<double> channel_std = ChannelStd(log, noise);
     if (log.kind == LogKind::kBalance) {
       for (int first = 0; first < log.NumRows();) {
         int end = std::min(log.NumRows(), first + options.balance_rows_per_block);
@@ -173,6 +191,7 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
         }
         loss = options.huber_threshold > 0 ? new ceres::HuberLoss(options.huber_threshold) : nullptr;
         a.problem->AddResidualBlock(cost, loss, theta_scaled);
+        a.balance_costs[i].push_back(cost);
       }
       continue;
     }
@@ -193,6 +212,7 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
       const int last = j + 1 < seg.starts.size() ? seg.starts[j + 1] : log.NumRows() - 1;
       auto* cost = new FlightSegmentCost(vehicle.model, free, log, seg.starts[j], last, has_next,
                                          channel_std, options.continuity_std, options.integrator);
+      cost->set_times(times);
       a.segment_costs[i].push_back(cost);
       // The Huber loss would also soften continuity; it is meant for outliers in outputs, and
       // continuity residuals are near zero at any solution, so the distortion is nil.
@@ -240,41 +260,42 @@ bool Predict(const Vehicle& vehicle, const FreeParameters& free,
   return true;
 }
 
-// The Fisher information of the free parameters (scaled coordinates) with the
-// segment states marginalised out (Schur complement), from the Jacobian at
-// the solution, evaluated without any robust loss.
-Eigen::MatrixXd MarginalInformation(Assembly& a, double* theta_scaled, int P) {
-  ceres::Problem::EvaluateOptions eval;
-  eval.parameter_blocks.push_back(theta_scaled);
-  for (double* b : a.state_blocks) eval.parameter_blocks.push_back(b);
-  eval.apply_loss_function = false;
-  eval.num_threads = 2;
-  ceres::CRSMatrix crs;
-  a.problem->Evaluate(eval, nullptr, nullptr, nullptr, &crs);
-  using Sparse = Eigen::SparseMatrix<double, Eigen::ColMajor>;
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(crs.values.size());
-  for (int r = 0; r < crs.num_rows; ++r) {
-    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) {
-      triplets.emplace_back(r, crs.cols[k], crs.values[k]);
-    }
+// The residual blocks of an assembled problem, for the information.
+std::vector<LogResidualBlocks> ResidualBlocks(const Vehicle& vehicle,
+                                              const std::vector<EstimationLog>& logs,
+                                              const Assembly& a) {
+  std::vector<LogResidualBlocks> out(logs.size());
+  for (size_t i = 0; i < logs.size(); ++i) {
+    out[i].log = &logs[i];
+    out[i].balance.assign(a.balance_costs[i].begin(), a.balance_costs[i].end());
+    out[i].segments.assign(a.segment_costs[i].begin(), a.segment_costs[i].end());
+    for (const Eigen::VectorXd& s : a.segments[i].states) out[i].segment_states.push_back(s.data());
+    if (!out[i].segments.empty()) out[i].held_states = UnobservableStates(logs[i], vehicle.model);
   }
-  Sparse J(crs.num_rows, crs.num_cols);
-  J.setFromTriplets(triplets.begin(), triplets.end());
-  const Sparse H = (J.transpose() * J).pruned();
-  const int n = crs.num_cols;
-  // Parameter block order puts theta's P columns first (no manifold on it).
-  const Eigen::MatrixXd H_tt = Eigen::MatrixXd(H.topLeftCorner(P, P));
-  if (n == P) return H_tt;
-  const Sparse H_ss = H.bottomRightCorner(n - P, n - P);
-  const Eigen::MatrixXd H_st = Eigen::MatrixXd(H.bottomLeftCorner(n - P, P));
-  Eigen::SimplicialLDLT<Sparse> ldlt(H_ss);
-  if (ldlt.info() != Eigen::Success) return H_tt;  // cannot marginalise: conditional info
-  const Eigen::MatrixXd X = ldlt.solve(H_st);
-  return H_tt - H_st.transpose() * X;
+  return out;
 }
 
 }  // namespace
+
+nlohmann::json OutputErrorResult::ColouredResiduals::ToJson(
+    const std::vector<std::string>& names) const {
+  nlohmann::json out = {{"applied", applied}};
+  if (!applied) return out;
+  nlohmann::json white = nlohmann::json::object(), factors = nlohmann::json::object();
+  auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
+  for (size_t k = 0; k < names.size(); ++k) {
+    white[names[k]] = number(white_std[k]);
+    factors[names[k]] = number(factor[k]);
+  }
+  out["method"] =
+      "Morelli & Klein: M^-1 [sum_k sum_j G_k^T Rvv(k-j) G_j] M^-1 with the residual "
+      "autocorrelation Rvv summed up to the lag where it has died out";
+  out["lags_samples"] = lags;
+  out["white_noise_std"] = white;
+  out["factor"] = factors;
+  out["corrected"] = "parameters.*.std, the covariance and the correlation matrix";
+  return out;
+}
 
 std::map<std::string, FitError> ChannelFitErrors(const std::vector<EstimationLog>& logs,
                                                  const std::vector<Eigen::MatrixXd>& predictions) {
@@ -313,7 +334,14 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
   Eigen::VectorXd theta_scaled = free.ScaledValues();
 
   ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  // Multiple shooting has the structure of bundle adjustment: many small
+  // segment-state blocks, each tied to a few residual blocks, and one shared
+  // parameter block. The Schur solver eliminates an independent set of the
+  // state blocks (Ceres picks it: neighbouring segments share a continuity
+  // residual) instead of forming and factoring the whole J^T J. Measured on
+  // the 60 s fit (bench/output_error_bench): 10 % less main-thread time than
+  // SPARSE_NORMAL_CHOLESKY, same estimates.
+  solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
   solver_options.max_num_iterations = options.max_iterations;
   solver_options.num_threads = options.num_threads;
   solver_options.function_tolerance = options.function_tolerance;
@@ -321,52 +349,71 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
   solver_options.gradient_tolerance = options.gradient_tolerance;
   solver_options.logging_type = ceres::SILENT;
   solver_options.update_state_every_iteration = false;
+  // The bounds make Ceres run a projected line search on every trust-region
+  // step (ParameterBlock::Plus projects onto the bounds in any case). With
+  // cubic interpolation it evaluates the gradient, i.e. a full pass with
+  // sensitivities, at every trial point, and near the solution it backtracks
+  // on cost differences at the integrator's noise level. One cost evaluation
+  // of the full step, no gradient (it is the trial point the trust region
+  // evaluates next: the segments' cache serves it); the trust region decides.
+  solver_options.line_search_interpolation_type = ceres::BISECTION;
+  solver_options.max_num_line_search_step_size_iterations = 1;
 
   Assembly previous;
   bool have_previous = false;
   std::vector<Eigen::MatrixXd> previous_predictions;
   double integration_seconds = 0;
+  SegmentCostTimes times;
+  nlohmann::json stage_timing = nlohmann::json::array();
   const int num_stages =
       static_cast<int>(options.segment_schedule_s.size()) + options.noise_relaxations;
   for (int stage = 0; stage < num_stages; ++stage) {
     const int schedule_index =
         std::min(stage, static_cast<int>(options.segment_schedule_s.size()) - 1);
     const double segment_s = options.segment_schedule_s[schedule_index];
-    if (stage >= static_cast<int>(options.segment_schedule_s.size())) {
-      // Output-error relaxation: new weights from the last solve's residuals.
+    const bool relaxation = stage >= static_cast<int>(options.segment_schedule_s.size());
+    const bool coarse = stage + 1 < static_cast<int>(options.segment_schedule_s.size());
+    Assembly a;
+    if (relaxation) {
+      // Output-error relaxation: new weights from the last solve's residuals,
+      // the same problem solved again from its solution.
       std::vector<Eigen::MatrixXd> residuals;
       for (size_t i = 0; i < logs.size(); ++i) {
         residuals.push_back(logs[i].values - previous_predictions[i]);
       }
       noise = NoiseFromResiduals(logs, residuals);
-    }
-    // Segment start states: measured at the first stage, then the previous
-    // solve's trajectory at the new boundaries.
-    auto start_state = [&](size_t log_index, int row) -> Eigen::VectorXd {
-      if (!have_previous) return InitialStateFromLog(logs[log_index], row);
-      const auto& seg = previous.segments[log_index];
-      const auto& costs = previous.segment_costs[log_index];
-      int j = static_cast<int>(std::upper_bound(seg.starts.begin(), seg.starts.end(), row) -
-                               seg.starts.begin()) - 1;
-      j = std::max(j, 0);
-      if (seg.starts[j] == row) return seg.states[j];
-      std::vector<Eigen::VectorXd> outputs;
-      Eigen::VectorXd end_state;
-      if (costs[j]->Predict(seg.states[j].data(), theta_scaled.data(), &outputs, &end_state) &&
-          row - seg.starts[j] < static_cast<int>(outputs.size())) {
-        return outputs[row - seg.starts[j]].head(kNumStates);
+      a = std::move(previous);
+      SetNoise(logs, noise, &a);
+    } else {
+      // Segment start states: measured at the first stage, then the previous
+      // solve's trajectory at the new boundaries.
+      auto start_state = [&](size_t log_index, int row) -> Eigen::VectorXd {
+        if (!have_previous) return InitialStateFromLog(logs[log_index], row);
+        const auto& seg = previous.segments[log_index];
+        const auto& costs = previous.segment_costs[log_index];
+        int j = static_cast<int>(std::upper_bound(seg.starts.begin(), seg.starts.end(), row) -
+                                 seg.starts.begin()) - 1;
+        j = std::max(j, 0);
+        if (seg.starts[j] == row) return seg.states[j];
+        std::vector<Eigen::VectorXd> outputs;
+        Eigen::VectorXd end_state;
+        if (costs[j]->Predict(seg.states[j].data(), theta_scaled.data(), &outputs, &end_state) &&
+            row - seg.starts[j] < static_cast<int>(outputs.size())) {
+          return outputs[row - seg.starts[j]].head(kNumStates);
+        }
+        return InitialStateFromLog(logs[log_index], row);
+      };
+      OutputErrorOptions stage_options = options;
+      if (coarse) {
+        stage_options.continuity_std = options.coarse_continuity_std;
+        stage_options.integrator = options.coarse_integrator;
       }
-      return InitialStateFromLog(logs[log_index], row);
-    };
-    const bool coarse_stage = stage + 1 < static_cast<int>(options.segment_schedule_s.size());
-    OutputErrorOptions stage_options = options;
-    if (coarse_stage) stage_options.continuity_std = options.coarse_continuity_std;
-    Assembly a = Assemble(vehicle, free, logs, noise, segment_s, stage_options,
-                          theta_scaled.data(), start_state);
+      a = Assemble(vehicle, free, logs, noise, segment_s, stage_options, theta_scaled.data(),
+                   start_state, /*tie_segments=*/true, &times);
+    }
     char stage_name[96];
     std::snprintf(stage_name, sizeof stage_name, "output-error stage %d/%d (segments %.2f s)",
                   stage + 1, num_stages, segment_s);
-    const bool coarse = stage + 1 < static_cast<int>(options.segment_schedule_s.size());
     solver_options.max_num_iterations =
         coarse ? options.coarse_max_iterations : options.max_iterations;
     solver_options.function_tolerance =
@@ -377,6 +424,14 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
     const auto solve_start = Clock::now();
     ceres::Solve(solver_options, a.problem.get(), &summary);
     integration_seconds += Since(solve_start);
+    stage_timing.push_back({{"segment_s", segment_s},
+                            {"iterations", summary.iterations.size() - 1},
+                            {"residual_evaluations", summary.num_residual_evaluations},
+                            {"jacobian_evaluations", summary.num_jacobian_evaluations},
+                            {"residual_seconds", summary.residual_evaluation_time_in_seconds},
+                            {"jacobian_seconds", summary.jacobian_evaluation_time_in_seconds},
+                            {"linear_solver_seconds", summary.linear_solver_time_in_seconds},
+                            {"solve_seconds", summary.total_time_in_seconds}});
     if (stage == 0) result.initial_cost = summary.initial_cost;
     result.iterations += summary.iterations.size() > 0 ? summary.iterations.size() - 1 : 0;
     result.final_cost = summary.final_cost;
@@ -398,18 +453,58 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
   }
 
   const auto covariance_start = Clock::now();
-  const Eigen::MatrixXd information =
-      MarginalInformation(previous, theta_scaled.data(), free.size());
-  result.identifiability = AnalyzeIdentifiability(information, free.names(), free.scales());
+  const OutputErrorInformation information =
+      ComputeOutputErrorInformation(ResidualBlocks(vehicle, logs, previous), theta_scaled.data(),
+                                    free.size(), options.coloured_residual_correction);
+  result.identifiability =
+      AnalyzeIdentifiability(information.information, free.names(), free.scales());
+  if (options.coloured_residual_correction) {
+    IdentifiabilityReport& report = result.identifiability;
+    const Eigen::VectorXd inverse_scales = free.scales().cwiseInverse();
+    const ColouredResidualCorrection corrected = CorrectForColouredResiduals(
+        information,
+        inverse_scales.asDiagonal() * report.covariance * inverse_scales.asDiagonal(),
+        options.coloured_max_lag);
+    OutputErrorResult::ColouredResiduals& coloured = result.coloured_residuals;
+    coloured.applied = true;
+    coloured.white_std = report.std;
+    coloured.lags = corrected.lags;
+    report.SetCovariance(free.scales().asDiagonal() * corrected.covariance_scaled *
+                         free.scales().asDiagonal());
+    coloured.factor = report.std.cwiseQuotient(coloured.white_std);
+  }
   free.WriteBack(theta_scaled.data(), &result.parameters);
   result.noise = noise;
   result.segments = previous.segments;
   result.predictions = previous_predictions;
   result.usable = true;
   result.seconds = Since(start);
-  result.timing = {{"solves_seconds", integration_seconds},
-                   {"covariance_seconds", Since(covariance_start)},
-                   {"total_seconds", result.seconds}};
+  // Wall time by kind: trial-point evaluations (integration of the state),
+  // Jacobian evaluations (integration with sensitivities and the output
+  // Jacobians), linear algebra (Ceres' linear solves and the covariance), and
+  // the rest (problem assembly, predictions, Ceres' bookkeeping).
+  double integration = 0, sensitivities = 0, linear_algebra = Since(covariance_start);
+  for (const nlohmann::json& s : stage_timing) {
+    integration += s["residual_seconds"].get<double>();
+    sensitivities += s["jacobian_seconds"].get<double>();
+    linear_algebra += s["linear_solver_seconds"].get<double>();
+  }
+  result.timing = {
+      {"total_seconds", result.seconds},
+      {"split_seconds",
+       {{"integration", integration},
+        {"sensitivities", sensitivities},
+        {"linear_algebra", linear_algebra},
+        {"other", result.seconds - integration - sensitivities - linear_algebra}}},
+      {"solves_seconds", integration_seconds},
+      {"covariance_seconds", Since(covariance_start)},
+      {"stages", stage_timing},
+      // Summed over the threads that evaluate residual blocks at once.
+      {"state_runs", times.state_runs.load()},
+      {"state_run_thread_seconds", 1e-9 * times.state_ns.load()},
+      {"sensitivity_runs", times.sensitivity_runs.load()},
+      {"sensitivity_run_thread_seconds", 1e-9 * times.sensitivity_ns.load()},
+      {"outputs_thread_seconds", 1e-9 * times.outputs_ns.load()}};
   return result;
 }
 

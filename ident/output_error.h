@@ -50,7 +50,17 @@ struct OutputErrorOptions {
   double coarse_continuity_std = 1e-2;
   // > 0: Huber loss on the output residuals at this many std (robust fit).
   double huber_threshold = 0;
+  // Correct the Cramér-Rao bounds for autocorrelated output residuals
+  // (Morelli & Klein; ident/output_error_information.h), summing the
+  // residual correlation up to coloured_max_lag samples at most.
+  bool coloured_residual_correction = false;
+  int coloured_max_lag = 200;
   IntegratorOptions integrator = DefaultIntegrator();
+  // The coarse stages' integrator: they only bring the start into the right
+  // basin, and their solution is refined at `integrator`'s accuracy, so a
+  // looser tolerance serves (a pass with sensitivities costs 40 % less at
+  // rtol 1e-5 than at 1e-7, bench/output_error_bench FlightPass).
+  IntegratorOptions coarse_integrator = CoarseIntegrator();
   int num_threads = 2;
   int balance_rows_per_block = 512;
   // Ceres stopping rules. A relative cost change of 1e-7 is far below what one
@@ -67,6 +77,12 @@ struct OutputErrorOptions {
     o.sensitivity_error_control = false;
     // A wild trial step (blown-up parameters) fails fast instead of grinding.
     o.max_steps_per_interval = 500;
+    return o;
+  }
+  static IntegratorOptions CoarseIntegrator() {
+    IntegratorOptions o = DefaultIntegrator();
+    o.relative_tolerance = 1e-5;
+    o.absolute_tolerance = 1e-7;
     return o;
   }
   bool IsValid(std::string* why) const;
@@ -89,6 +105,16 @@ struct OutputErrorResult {
   // started from its fitted state; balance, the static model. Same shape as
   // each log's values.
   std::vector<Eigen::MatrixXd> predictions;
+  // With coloured_residual_correction: the white-noise std, the truncation
+  // lag per flight log and corrected std / white std per parameter (the
+  // identifiability report then holds the corrected std and covariance).
+  struct ColouredResiduals {
+    bool applied = false;
+    Eigen::VectorXd white_std;
+    Eigen::VectorXd factor;
+    std::vector<int> lags;
+    nlohmann::json ToJson(const std::vector<std::string>& names) const;
+  } coloured_residuals;
   int iterations = 0;
   double initial_cost = 0, final_cost = 0;
   std::string termination;                  // Ceres' reason for stopping

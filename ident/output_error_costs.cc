@@ -1,5 +1,6 @@
 #include "ident/output_error_costs.h"
 
+#include <chrono>
 #include <cmath>
 
 #include <glog/logging.h>
@@ -43,25 +44,60 @@ FlightSegmentCost::FlightSegmentCost(const VehicleModel& model, const FreeParame
                                            free.indices());
 }
 
+void FlightSegmentCost::SetChannelStd(const std::vector<double>& channel_std) {
+  for (Term& t : terms_) t.weight = 1.0 / channel_std[t.column];
+}
+
+bool FlightSegmentCost::CachedRun::At(const double* start, const double* theta) const {
+  return valid && Eigen::Map<const Eigen::VectorXd>(start, start_state.size()) == start_state &&
+         Eigen::Map<const Eigen::VectorXd>(theta, theta_scaled.size()) == theta_scaled;
+}
+
+const Trajectory* FlightSegmentCost::Simulate(const double* start_state,
+                                              const double* theta_scaled,
+                                              bool sensitivities) const {
+  // A run with sensitivities also serves a request without.
+  if (sensitive_run_.At(start_state, theta_scaled)) {
+    return sensitive_run_.ok ? &sensitive_run_.trajectory : nullptr;
+  }
+  CachedRun& run = sensitivities ? sensitive_run_ : plain_run_;
+  if (!sensitivities && run.At(start_state, theta_scaled)) {
+    return run.ok ? &run.trajectory : nullptr;
+  }
+  Simulator& simulator = sensitivities ? *sensitive_ : *plain_;
+  simulator.SetTheta(free_.Theta(theta_scaled));
+  using Clock = std::chrono::steady_clock;
+  const auto run_start = Clock::now();
+  run.ok = simulator.Run(log_.inputs, first_, last_,
+                         Eigen::Map<const Eigen::VectorXd>(start_state, kNumStates),
+                         &run.trajectory);
+  if (times_) {
+    const long ns =
+        std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - run_start).count();
+    (sensitivities ? times_->sensitivity_runs : times_->state_runs) += 1;
+    (sensitivities ? times_->sensitivity_ns : times_->state_ns) += ns;
+  }
+  run.start_state = Eigen::Map<const Eigen::VectorXd>(start_state, kNumStates);
+  run.theta_scaled = Eigen::Map<const Eigen::VectorXd>(theta_scaled, free_.size());
+  run.valid = true;
+  return run.ok ? &run.trajectory : nullptr;
+}
+
 bool FlightSegmentCost::Predict(const double* start_state, const double* theta_scaled,
                                 std::vector<Eigen::VectorXd>* outputs,
                                 Eigen::VectorXd* end_state) const {
+  const Trajectory* trajectory = Simulate(start_state, theta_scaled, false);
+  if (!trajectory) return false;
   const Eigen::VectorXd theta = free_.Theta(theta_scaled);
-  plain_->SetTheta(theta);
-  Trajectory trajectory;
-  if (!plain_->Run(log_.inputs, first_, last_,
-                   Eigen::Map<const Eigen::VectorXd>(start_state, kNumStates), &trajectory)) {
-    return false;
-  }
   outputs->clear();
   const int end = has_next_ ? last_ - 1 : last_;
   for (int k = first_; k <= end; ++k) {
     Eigen::VectorXd y(kNumFlightChannels);
-    const Eigen::VectorXd& x = trajectory.states[k - first_];
+    const Eigen::VectorXd& x = trajectory->states[k - first_];
     FlightOutputs(model_, theta.data(), x.data(), log_.inputs.input(k).data(), y.data());
     outputs->push_back(y);
   }
-  *end_state = trajectory.states.back();
+  *end_state = trajectory->states.back();
   return true;
 }
 
@@ -73,13 +109,20 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
   const bool want_next = jacobians && has_next_ && jacobians[2];
   const bool sensitivities = want_state || want_theta;
   const Eigen::VectorXd theta = free_.Theta(parameters[1]);
-  Simulator& simulator = sensitivities ? *sensitive_ : *plain_;
-  simulator.SetTheta(theta);
-  Trajectory trajectory;
-  if (!simulator.Run(log_.inputs, first_, last_,
-                     Eigen::Map<const Eigen::VectorXd>(parameters[0], kNumStates), &trajectory)) {
-    return false;
-  }
+  const Trajectory* simulated = Simulate(parameters[0], parameters[1], sensitivities);
+  if (!simulated) return false;
+  const Trajectory& trajectory = *simulated;
+  struct OutputTimer {
+    SegmentCostTimes* times;
+    std::chrono::steady_clock::time_point start;
+    ~OutputTimer() {
+      if (times) {
+        times->outputs_ns += std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                 std::chrono::steady_clock::now() - start)
+                                 .count();
+      }
+    }
+  } output_timer{times_, std::chrono::steady_clock::now()};
   const int num_residuals = this->num_residuals();
   Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J_state(
       want_state ? jacobians[0] : nullptr, want_state ? num_residuals : 0, kNumStates);
@@ -174,12 +217,16 @@ BalanceRowsCost::BalanceRowsCost(const VehicleModel& model, const FreeParameters
           ++n;
         }
       }
-      if (n > 0) terms_.push_back({a, log.channels[c], std::sqrt(n) / channel_std[c], sum / n});
+      if (n > 0) terms_.push_back({a, log.channels[c], c, n, std::sqrt(n) / channel_std[c], sum / n});
     }
     a = b;
   }
   set_num_residuals(static_cast<int>(terms_.size()));
   mutable_parameter_block_sizes()->push_back(free.size());
+}
+
+void BalanceRowsCost::SetChannelStd(const std::vector<double>& channel_std) {
+  for (Term& t : terms_) t.weight = std::sqrt(t.count) / channel_std[t.column];
 }
 
 bool BalanceRowsCost::Evaluate(double const* const* parameters, double* residuals,

@@ -21,8 +21,18 @@
 //
 // Both return false (Ceres rejects the step) when the model cannot be
 // evaluated: CVODE failure, non-finite values.
+//
+// A FlightSegmentCost keeps its last simulation with and without
+// sensitivities and reuses it when asked for the same (s_j, theta) again,
+// which the solver does often: the projected line search of a bounded problem
+// evaluates the trial point and the accepted step's Jacobian is then taken
+// there again; a noise relaxation re-solves from the previous solution; the
+// covariance and the predictions are taken at the solution. The channel
+// weights are not part of the cached simulation, so they can change between
+// solves (SetChannelStd) without a new CVODE run.
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -36,6 +46,16 @@
 
 namespace coaxid {
 
+// Where the flight residual blocks spend their time, summed over the threads
+// that evaluate blocks concurrently (so it can exceed the wall time): CVODE
+// runs of the state alone, runs with sensitivities, and the rest (output
+// model, its Jacobians, chaining them with the sensitivities).
+struct SegmentCostTimes {
+  std::atomic<long> state_runs{0}, state_ns{0};
+  std::atomic<long> sensitivity_runs{0}, sensitivity_ns{0};
+  std::atomic<long> outputs_ns{0};
+};
+
 class FlightSegmentCost : public ceres::CostFunction {
  public:
   // channel_std[c]: noise std of log channel c. All references must outlive the cost.
@@ -46,9 +66,26 @@ class FlightSegmentCost : public ceres::CostFunction {
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
 
+  // New noise std per log channel (the output-error relaxation).
+  void SetChannelStd(const std::vector<double>& channel_std);
+
+  // Accumulate evaluation times there (may be null; must outlive the cost).
+  void set_times(SegmentCostTimes* times) { times_ = times; }
+
   int first() const { return first_; }
   int last() const { return last_; }
+  bool has_next() const { return has_next_; }
   int NumOutputResiduals() const { return static_cast<int>(terms_.size()); }
+
+  // Output residual r of Evaluate is terms()[r]; the continuity residuals
+  // (if has_next) follow them.
+  struct Term {
+    int row;      // log row
+    int column;   // log channel column
+    int channel;  // FlightChannel
+    double weight;
+  };
+  const std::vector<Term>& terms() const { return terms_; }
 
   // The model's outputs (15 flight channels) at rows first..end and the state
   // at `last`, for given segment start state and scaled parameters. False if
@@ -57,12 +94,6 @@ class FlightSegmentCost : public ceres::CostFunction {
                std::vector<Eigen::VectorXd>* outputs, Eigen::VectorXd* end_state) const;
 
  private:
-  struct Term {
-    int row;      // log row
-    int column;   // log channel column
-    int channel;  // FlightChannel
-    double weight;
-  };
   const VehicleModel& model_;
   const FreeParameters& free_;
   const EstimationLog& log_;
@@ -71,21 +102,39 @@ class FlightSegmentCost : public ceres::CostFunction {
   double continuity_weight_;
   std::vector<Term> terms_;
   std::vector<int> rows_;  // distinct rows with terms, ascending
-  // One simulator without and one with sensitivities; Ceres may evaluate
-  // different blocks in parallel but never one block twice at once.
+  // The trajectory from start_state with theta_scaled (with sensitivities if
+  // asked), from the cache when the last run at that point is there; null if
+  // the simulation fails.
+  const Trajectory* Simulate(const double* start_state, const double* theta_scaled,
+                             bool sensitivities) const;
+  struct CachedRun {
+    bool valid = false, ok = false;
+    Eigen::VectorXd start_state, theta_scaled;
+    Trajectory trajectory;
+    bool At(const double* start_state, const double* theta_scaled) const;
+  };
+  // One simulator without and one with sensitivities, each with its last run;
+  // Ceres may evaluate different blocks in parallel but never one block twice
+  // at once.
   mutable std::unique_ptr<Simulator> plain_, sensitive_;
+  mutable CachedRun plain_run_, sensitive_run_;
+  SegmentCostTimes* times_ = nullptr;
 };
 
 class BalanceRowsCost : public ceres::CostFunction {
  public:
   BalanceRowsCost(const VehicleModel& model, const FreeParameters& free, const EstimationLog& log,
                   int first, int end, const std::vector<double>& channel_std);
+  // New noise std per log channel (the output-error relaxation).
+  void SetChannelStd(const std::vector<double>& channel_std);
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
 
  private:
   struct Term {
     int row, channel;  // a row of the hold (its inputs), the BalanceChannel
+    int column;        // the log channel column
+    int count;         // n, the hold's finite values of the channel
     double weight;     // sqrt(n) / std
     double mean;       // mean of the hold's finite values of the channel
   };

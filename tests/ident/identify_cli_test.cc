@@ -175,6 +175,45 @@ TEST_F(IdentifyCliTest, BadInputExitsTwoAndWritesNothing) {
   }
 }
 
+// `identify --method=output_error --coloured_residuals`: report.json says
+// which std are corrected, by what factor, and from which white-noise std.
+TEST_F(IdentifyCliTest, OutputErrorReportsTheColouredResidualCorrection) {
+  const std::string scenario = Path("short.yaml");
+  std::ofstream(scenario) << "scenario: flight\nseed: 43\nflight: {duration_s: 3}\n";
+  const std::string flight = Path("flight.csv");
+  const RunResult sim = RunCoaxid("simulate --config=" + config_ + " --scenario=" + scenario +
+                                  " --out=" + flight);
+  ASSERT_EQ(sim.status, 0) << sim.output;
+  BalanceScenario s;
+  s.hold_s = 0.5;
+  const std::string balance = WriteBalance("bal.csv", s, 33);
+  const std::string out = Path("out");
+  const RunResult r = RunCoaxid("identify --method=output_error --logs=" + flight + "," + balance +
+                                " --config=" + config_ + " --out=" + out +
+                                " --holdout_fraction=0 --coloured_residuals");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(Contains(r.output, "corrected for coloured residuals")) << r.output;
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(out + "/report.json"));
+  const nlohmann::json& coloured = report["coloured_residuals"];
+  EXPECT_EQ(coloured["applied"], true);
+  EXPECT_EQ(coloured["lags_samples"].size(), 1u);  // one flight log
+  int checked = 0;
+  for (const auto& [name, factor] : coloured["factor"].items()) {
+    const auto& p = report["parameters"][name];
+    if (p["std"].is_null()) {  // not identifiable from 3 s of flight: nothing to correct
+      EXPECT_TRUE(factor.is_null()) << name;
+      continue;
+    }
+    ASSERT_TRUE(factor.is_number()) << name;
+    const double white = coloured["white_noise_std"][name];
+    EXPECT_GT(factor.get<double>(), 0) << name;
+    // The reported std is the corrected one.
+    EXPECT_NEAR(p["std"].get<double>(), factor.get<double>() * white, 1e-9 * white) << name;
+    ++checked;
+  }
+  EXPECT_GE(checked, 9);  // the balance log fixes the rotor constants and d
+}
+
 TEST_F(IdentifyCliTest, CheckSaysFlightLogsAreNotForLinearKf) {
   const std::string flight = std::string(COAXID_SOURCE_DIR) + "/data/glmav/flight_3211.csv";
   const std::string balance = std::string(COAXID_SOURCE_DIR) + "/data/glmav/balance.csv";

@@ -173,6 +173,71 @@ TEST(OutputError, MonteCarloSpreadMatchesReportedStd) {
   EXPECT_GE(checked, 6);  // alpha, beta, sigma0, Cz, gamma1, gamma2, d
 }
 
+// Coloured output noise (first order autoregressive, correlation 0.9 between
+// 5 ms samples, like slow model error or filtered sensors): the white-noise
+// Cramér-Rao std is optimistic, the corrected one (Morelli & Klein) matches
+// the spread of the estimates over noise seeds.
+TEST(OutputError, ColouredResidualCorrectionMatchesMonteCarloSpread) {
+  const Vehicle nominal = Nominal();
+  const Vehicle truth = MakeTruthVehicle(nominal.config, TruthScenario());
+  // Parameters a flight log determines once d and the rotor constants are
+  // known (model.md, decision 8); the fits start at the truth.
+  Vehicle start = truth;
+  const std::vector<std::string> estimated = {"Cz", "Ixx", "Iyy", "Izz"};  // config order
+  for (int i : truth.parameters.FreeIndices()) {
+    const std::string& name = truth.parameters[i].name;
+    start.parameters.SetEstimated(
+        name, std::find(estimated.begin(), estimated.end(), name) != estimated.end());
+  }
+  const EstimationLog clean = MakeEstimationLog(FlightLog(truth, 2.0, 11, false));
+  const std::map<std::string, double> sensor_std = FlightScenario{}.noise_std;
+  OutputErrorOptions options = FastOptions();
+  options.segment_schedule_s = {1.0};
+  options.noise_relaxations = 0;  // the true noise std: the bounds are for a known R
+  for (const std::string& name : clean.channel_names) options.noise.std[name] = sensor_std.at(name);
+  options.coloured_residual_correction = true;
+  const double a = 0.9;
+  const int seeds = 30;
+  const int P = static_cast<int>(estimated.size());
+  std::vector<std::vector<double>> estimates(P);
+  Eigen::VectorXd white = Eigen::VectorXd::Zero(P), corrected = Eigen::VectorXd::Zero(P);
+  for (int seed = 0; seed < seeds; ++seed) {
+    std::mt19937_64 rng(1000 + seed);
+    std::normal_distribution<double> normal;
+    EstimationLog log = clean;
+    for (int c = 0; c < log.NumChannels(); ++c) {
+      const double sigma = options.noise.std[log.channel_names[c]];
+      double e = sigma * normal(rng);  // stationary from the first row
+      for (int k = 0; k < log.NumRows(); ++k) {
+        log.values(k, c) += e;
+        e = a * e + std::sqrt(1 - a * a) * sigma * normal(rng);
+      }
+    }
+    const OutputErrorResult r = FitOutputError(start, {log}, options);
+    ASSERT_TRUE(r.usable) << r.why_not_usable;
+    ASSERT_TRUE(r.coloured_residuals.applied);
+    for (int k = 0; k < P; ++k) {
+      ASSERT_EQ(r.identifiability.names[k], estimated[k]);
+      estimates[k].push_back(r.parameters.Value(estimated[k]));
+      white[k] += r.coloured_residuals.white_std[k] / seeds;
+      corrected[k] += r.identifiability.std[k] / seeds;
+    }
+  }
+  for (int k = 0; k < P; ++k) {
+    double mean = 0, var = 0;
+    for (double e : estimates[k]) mean += e / seeds;
+    for (double e : estimates[k]) var += (e - mean) * (e - mean) / (seeds - 1);
+    const double spread = std::sqrt(var);
+    // 30 seeds: the sample std scatters by ~13 %, so 1.5 is a ~3-sigma band.
+    EXPECT_LT(spread, 1.5 * corrected[k]) << estimated[k] << " white " << white[k];
+    EXPECT_GT(spread, corrected[k] / 1.5) << estimated[k] << " white " << white[k];
+    // The white-noise bound is far too small for this noise (what the
+    // correction is for): for a sensitivity that varies slowly against the
+    // noise, the variance is (1 + a) / (1 - a) = 19 times the white one.
+    EXPECT_GT(spread, 1.5 * white[k]) << estimated[k] << " corrected " << corrected[k];
+  }
+}
+
 // The sensitivity-based Jacobian of a segment block against central
 // differences of its residuals.
 TEST(OutputError, SegmentJacobianEqualsFiniteDifferences) {
