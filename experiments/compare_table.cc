@@ -1,5 +1,6 @@
 #include "experiments/compare_table.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <set>
@@ -391,23 +392,30 @@ Figure EstimatesFigure(const json& c) {
     PlotPanel panel;
     panel.title = row["name"].get<std::string>();
     panel.key = "off";
-    bool any = false;
+    double lowest = HUGE_VAL, highest = -HUGE_VAL;
+    auto extend = [&](double y) {
+      lowest = std::min(lowest, y);
+      highest = std::max(highest, y);
+    };
     for (size_t i = 0; i < methods.size(); ++i) {
       const json e = row["estimates"].value(methods[i], json::object());
       const double value = NumberOr(e, "value");
       const std::string kind = e.value("kind", "");
       if (!std::isfinite(value) || (kind != "estimated" && kind != "not identifiable")) continue;
-      any = true;
       const double x = i + 1.0;
       const std::string color = std::string(" lc rgb '") + Color(methods[i]) + "'";
       if (kind == "estimated") {
         const double s = NumberOr(e, "std");
         panel.series.push_back({"", {x, x}, {value - s, value + s}, "lines lw 2" + color});
+        extend(value - s);
+        extend(value + s);
       }
-      panel.series.push_back(
-          {methods[i], {x}, {value}, (kind == "estimated" ? "points pt 7 ps 1.2" : "points pt 6 ps 1.5") + color});
+      panel.series.push_back({methods[i], {x}, {value},
+                              (kind == "estimated" ? "points pt 7 ps 1.2" : "points pt 6 ps 1.5") +
+                                  color});
+      extend(value);
     }
-    if (!any) continue;
+    if (panel.series.empty()) continue;
     double ref = NumberOr(row, "truth");
     if (reference == "output_error") {
       const json e = row["estimates"].value("output_error", json::object());
@@ -415,7 +423,20 @@ Figure EstimatesFigure(const json& c) {
     }
     if (std::isfinite(ref)) {
       panel.series.push_back({reference, {0.5, 3.5}, {ref, ref}, "lines dt 2 lc rgb 'black'"});
+      extend(ref);
     }
+    // Values of 1e-5 and such in units of their power of ten, so the tick
+    // labels keep their digits; the range padded so nothing sits on the frame.
+    const double magnitude = std::max(std::fabs(lowest), std::fabs(highest));
+    const int exponent = magnitude > 0 ? static_cast<int>(std::floor(std::log10(magnitude))) : 0;
+    const double unit = std::abs(exponent) >= 3 ? std::pow(10.0, exponent) : 1.0;
+    if (unit != 1.0) panel.title += " [1e" + std::to_string(exponent) + "]";
+    for (PlotSeries& series : panel.series) {
+      for (double& y : series.y) y /= unit;
+    }
+    const double pad = 0.1 * std::max(highest - lowest, 1e-3 * magnitude) / unit;
+    panel.y_min = lowest / unit - pad;
+    panel.y_max = highest / unit + pad;
     f.panels.push_back(panel);
   }
   return f;

@@ -24,11 +24,13 @@ double NumberAt(const json& object, const std::string& key) {
   return object[key].get<double>();
 }
 
-// Every heading one level deeper, so a command's report becomes a section.
-std::string DemoteHeadings(const std::string& markdown) {
+// A command's report as a section: its title dropped, every other heading
+// one level deeper.
+std::string AsSection(const std::string& markdown) {
   std::istringstream in(markdown);
   std::string out;
   for (std::string line; std::getline(in, line);) {
+    if (line.rfind("# ", 0) == 0) continue;
     out += (line.rfind("#", 0) == 0 ? "#" : "") + line + "\n";
   }
   return out;
@@ -73,6 +75,8 @@ void EstimatesTable(std::ostringstream& o, const json& comparison, const std::st
     const json& e = row["estimates"][method];
     const std::string kind = e.value("kind", "");
     if (kind != "estimated" && kind != "not identifiable") continue;
+    // The rows on the linear method's Cz split repeat the others' one Cz.
+    if (method != "linear_kf" && row.contains("description")) continue;
     o << "| " << row["name"].get<std::string>() << " | ";
     if (truth) o << Format(NumberAt(row, "truth"), "%.5g") << " | ";
     o << EstimateText(e) << " |";
@@ -110,7 +114,8 @@ void DiscoverySection(std::ostringstream& o, const DemoDiscovery& d) {
   std::string added;
   for (const json& a : j["added"]) added += (added.empty() ? "" : ", ") + a.get<std::string>();
   o << "\n\nAdded: **" << (added.empty() ? "nothing" : added) << "**";
-  for (const auto& [name, p] : j.value("added_parameters", json::object()).items()) {
+  const json added_parameters = j.value("added_parameters", json::object());
+  for (const auto& [name, p] : added_parameters.items()) {
     o << "; " << name << " = " << Format(NumberAt(p, "value"), "%.4g");
     if (p.contains("std") && p["std"].is_number()) o << " ± " << Format(p["std"].get<double>(), "%.2g");
   }
@@ -183,9 +188,9 @@ std::string DemoReportMarkdown(const DemoRecord& r) {
                 "value because flight logs alone fix only ratios (model.md decision 8).",
                 {"parameters", "fit", "innovations"});
 
-  o << "\n## 5. The three compared\n\nReport paths in this section's tables are relative to `"
+  o << "\n## 5. The three compared (`coaxid compare`)\n\nReport paths in this section's tables are relative to `"
     << r.compare_folder << "/`.\n\n"
-    << DemoteHeadings(ComparisonMarkdown(r.comparison, r.compare_folder + "/plots/estimates.png"));
+    << AsSection(ComparisonMarkdown(r.comparison, r.compare_folder + "/plots/estimates.png"));
 
   o << "\n## 6. The closing loop: what the declared model lacks (`coaxid discover`)\n";
   for (const DemoDiscovery& d : r.discoveries) DiscoverySection(o, d);
