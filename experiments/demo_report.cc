@@ -54,8 +54,12 @@ std::vector<std::string> KeyPlots(const json& report, const std::string& folder,
   return out;
 }
 
-void Images(std::ostringstream& o, const std::vector<std::string>& plots) {
-  for (const std::string& p : plots) o << "\n![" << p << "](" << p << ")\n";
+// Each plot as a figure captioned "what: file name".
+void Images(std::ostringstream& o, const std::string& what, const std::vector<std::string>& plots) {
+  for (const std::string& p : plots) {
+    const std::string stem = p.substr(p.rfind('/') + 1, p.size() - p.rfind('/') - 5);
+    o << "\n![" << what << ": " << stem << "](" << p << ")\n";
+  }
 }
 
 const json* MethodOf(const json& comparison, const std::string& method) {
@@ -104,7 +108,7 @@ void MethodSection(std::ostringstream& o, const DemoRecord& r, const std::string
     << ", validation " << Format(NumberAt((*m)["validation"], "overall_nrmse"), "%.3f") << ".\n";
   EstimatesTable(o, r.comparison, method);
   const auto report = r.reports.find(method);
-  if (report != r.reports.end()) Images(o, KeyPlots(report->second, folder, plot_keys, 3));
+  if (report != r.reports.end()) Images(o, method, KeyPlots(report->second, folder, plot_keys, 3));
 }
 
 void DiscoverySection(std::ostringstream& o, const DemoDiscovery& d) {
@@ -142,7 +146,7 @@ void DiscoverySection(std::ostringstream& o, const DemoDiscovery& d) {
     }
     o << "\n";
   }
-  Images(o, KeyPlots(j, d.folder, {"fit_1", "residual_autocorrelation"}, 2));
+  Images(o, "discover", KeyPlots(j, d.folder, {"fit_1", "residual_autocorrelation"}, 2));
 }
 
 }  // namespace
