@@ -77,8 +77,8 @@ fs::path StagingFolder(const std::string& out) {
   fs::path target = fs::path(out).lexically_normal();
   if (target.filename().empty()) target = target.parent_path();
   const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  return parent / ("." + target.filename().string() + ".compare-partial-" +
-                   std::to_string(::getpid()));
+  return parent /
+         ("." + target.filename().string() + ".compare-partial-" + std::to_string(::getpid()));
 }
 
 // Moves everything in staging into out (replacing what is there), then
@@ -135,8 +135,9 @@ json Compare(const CompareRequest& request) {
   runs[2].logs = flight;
   runs[2].validate = validate_flight;
   if (flight.empty()) {
-    runs[2].reason = "no flight log in --logs (the EKF estimates states and parameters from "
-                     "flight logs)";
+    runs[2].reason =
+        "no flight log in --logs (the EKF estimates states and parameters from "
+        "flight logs)";
   }
 
   const fs::path staging = StagingFolder(request.out);
@@ -215,14 +216,9 @@ json Compare(const CompareRequest& request) {
 }
 
 int RunCompare() {
-  CompareRequest request;
-  request.logs = FLAGS_logs;
-  request.validate = FLAGS_validate;
-  request.config = FLAGS_config;
-  request.out = FLAGS_out;
-  request.truth = FLAGS_truth;
-  request.holdout_fraction = FLAGS_holdout_fraction;
-  Compare(request);
+  const IdentifyRun flags = IdentifyRunFromFlags();
+  Compare(
+      {flags.logs, flags.validate, flags.config, flags.out, FLAGS_truth, flags.holdout_fraction});
   return 0;
 }
 

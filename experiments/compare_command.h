@@ -20,9 +20,8 @@
 // method ran.
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace coaxid {
 

@@ -6,6 +6,8 @@
 #include <set>
 #include <sstream>
 
+#include "experiments/report_values.h"
+
 namespace coaxid {
 namespace {
 
@@ -16,11 +18,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const char* const kModelUnknowns[] = {"alpha",  "beta",   "sigma0", "Cx",  "Cy",  "Cz",
                                       "gamma1", "gamma2", "d",      "Ixx", "Iyy", "Izz"};
 
-double NumberOr(const json& object, const char* key, double fallback = kNaN) {
-  if (!object.is_object() || !object.contains(key) || !object[key].is_number()) return fallback;
-  return object[key].get<double>();
-}
-
 json NumberJson(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 // One method's entry for one parameter, from its report.json "parameters"
@@ -28,11 +25,11 @@ json NumberJson(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 // held at the config's) or absent.
 json Entry(const json& p) {
   if (!p.is_object() || !p.contains("value")) return {{"kind", "absent"}};
-  const double value = NumberOr(p, "value");
+  const double value = JsonNumber(p, "value");
   if (p.contains("estimated") && p["estimated"] == false) {
     return {{"kind", "config"}, {"value", NumberJson(value)}, {"std", nullptr}};
   }
-  const double std = NumberOr(p, "std");
+  const double std = JsonNumber(p, "std");
   if (std::isfinite(std) && std >= 0 && std::isfinite(value)) {
     return {{"kind", "estimated"}, {"value", value}, {"std", std}};
   }
@@ -44,7 +41,7 @@ bool HasStd(const json& e) { return e.value("kind", "") == "estimated"; }
 const json& Parameters(const MethodRun& run) {
   static const json kNone = json::object();
   return run.status == "ran" && run.report.contains("parameters") ? run.report["parameters"]
-                                                                   : kNone;
+                                                                  : kNone;
 }
 
 const MethodRun* Find(const std::vector<MethodRun>& runs, const std::string& method) {
@@ -88,8 +85,8 @@ json ChannelErrors(const json& section) {
   if (!section.is_object()) return out;
   for (const auto& [channel, e] : section.items()) {
     if (!e.is_object() || !e.contains("nrmse")) continue;
-    out[channel] = {{"rms", NumberJson(NumberOr(e, "rms"))},
-                    {"nrmse", NumberJson(NumberOr(e, "nrmse"))}};
+    out[channel] = {{"rms", NumberJson(JsonNumber(e, "rms"))},
+                    {"nrmse", NumberJson(JsonNumber(e, "nrmse"))}};
   }
   return out;
 }
@@ -114,37 +111,34 @@ const char* FitDefinition(const std::string& method) {
 }
 
 json MethodJson(const MethodRun& run) {
-  json m = {{"method", run.method},      {"status", run.status},
-            {"logs", run.logs},          {"validate", run.validate},
+  json m = {{"method", run.method},
+            {"status", run.status},
+            {"logs", run.logs},
+            {"validate", run.validate},
             {"wall_s", NumberJson(run.wall_s)}};
   if (!run.reason.empty()) m["reason"] = run.reason;
   if (run.status != "ran") return m;
   m["report"] = run.folder + "/report.json";
   m["fit"] = ChannelErrors(run.report.value("fit", json()));
-  m["fit"]["overall_nrmse"] = NumberJson(NumberOr(run.report.value("fit", json()), "overall_nrmse"));
+  m["fit"]["overall_nrmse"] =
+      NumberJson(JsonNumber(run.report.value("fit", json()), "overall_nrmse"));
   m["validation"] = ChannelErrors(run.report.value("validation", json()));
   m["validation"]["overall_nrmse"] =
-      NumberJson(NumberOr(run.report.value("validation", json()), "overall_nrmse"));
+      NumberJson(JsonNumber(run.report.value("validation", json()), "overall_nrmse"));
   m["validation_data"] = ValidationData(run.report);
   m["fit_definition"] = FitDefinition(run.method);
   return m;
-}
-
-std::string Format(double v, const char* format = "%.5g") {
-  if (!std::isfinite(v)) return "-";
-  char text[64];
-  std::snprintf(text, sizeof text, format, v);
-  return text;
 }
 
 }  // namespace
 
 std::string EstimateText(const json& e) {
   const std::string kind = e.value("kind", "absent");
-  const double value = NumberOr(e, "value");
-  if (kind == "estimated") return Format(value) + " ± " + Format(NumberOr(e, "std"), "%.2g");
-  if (kind == "not identifiable") return Format(value) + " (not identifiable)";
-  if (kind == "config") return Format(value) + " (config)";
+  const double value = JsonNumber(e, "value");
+  if (kind == "estimated")
+    return NumberText(value, "%.5g") + " ± " + NumberText(JsonNumber(e, "std"), "%.2g");
+  if (kind == "not identifiable") return NumberText(value, "%.5g") + " (not identifiable)";
+  if (kind == "config") return NumberText(value, "%.5g") + " (config)";
   if (kind == "over-parameterised") return "two values: Cz_alpha, Cz_beta rows";
   return "-";
 }
@@ -152,9 +146,9 @@ std::string EstimateText(const json& e) {
 namespace {
 
 std::string Sigma(const json& object, const std::string& key) {
-  const double z = NumberOr(object, key.c_str());
+  const double z = JsonNumber(object, key);
   if (!std::isfinite(z)) return "-";
-  const std::string text = Format(z, "%.2f");
+  const std::string text = NumberText(z, "%.2f");
   return std::fabs(z) > 3 ? "**" + text + "**" : text;
 }
 
@@ -189,10 +183,10 @@ json ComparisonJson(const std::vector<MethodRun>& runs, const json& truth) {
   const MethodRun* linear = Find(runs, "linear_kf");
   const bool linear_ran = linear != nullptr && linear->status == "ran";
   const MethodRun* oe = Find(runs, "output_error");
-  out["reference"] = truth.is_object()                 ? "truth"
+  out["reference"] = truth.is_object()                      ? "truth"
                      : oe != nullptr && oe->status == "ran" ? "output_error"
                                                             : "none";
-  auto truth_of = [&](const std::string& name) { return NumberOr(truth, name.c_str()); };
+  auto truth_of = [&](const std::string& name) { return JsonNumber(truth, name); };
 
   // The parameters some method estimated, model.md's first, then effects'.
   std::vector<std::string> names(std::begin(kModelUnknowns), std::end(kModelUnknowns));
@@ -234,8 +228,7 @@ json ComparisonJson(const std::vector<MethodRun>& runs, const json& truth) {
     rows.push_back(Row("Cz_beta",
                        "linear_kf only: Cz_beta = Cz beta (paper eqs. 65, 69-70); collinear with "
                        "beta in Z_bar, separated only through L and M (model.md decision 6)",
-                       Cz * truth_of("beta"),
-                       {{"linear_kf", Entry(lp.value("Cz_beta", json()))}}));
+                       Cz * truth_of("beta"), {{"linear_kf", Entry(lp.value("Cz_beta", json()))}}));
     for (const auto& [label, key] :
          {std::pair<const char*, const char*>{"Cz = Cz_alpha / alpha", "from_Cz_alpha"},
           std::pair<const char*, const char*>{"Cz = Cz_beta / beta", "from_Cz_beta"}}) {
@@ -277,11 +270,12 @@ std::string ComparisonMarkdown(const json& c, const std::string& plot) {
        "|---|---|---|---|---|\n";
   for (const json& m : c["methods"]) {
     std::string logs;
-    for (const json& l : m["logs"]) logs += (logs.empty() ? "`" : ", `") + l.get<std::string>() + "`";
+    for (const json& l : m["logs"])
+      logs += (logs.empty() ? "`" : ", `") + l.get<std::string>() + "`";
     const bool ran = m["status"] == "ran";
     o << "| " << m["method"].get<std::string>() << " | " << (logs.empty() ? "-" : logs) << " | "
       << (ran ? m.value("validation_data", "") : "-") << " | "
-      << Format(NumberOr(m, "wall_s"), "%.2f") << " | "
+      << NumberText(JsonNumber(m, "wall_s"), "%.2f") << " | "
       << (ran ? "ran: `" + m.value("report", "") + "`"
               : m["status"].get<std::string>() + ": " + m.value("reason", ""))
       << " |\n";
@@ -294,7 +288,7 @@ std::string ComparisonMarkdown(const json& c, const std::string& plot) {
   o << "\n";
   for (const json& row : c["parameters"]) {
     o << "| " << row["name"].get<std::string>() << " |";
-    if (has_truth) o << " " << Format(NumberOr(row, "truth")) << " |";
+    if (has_truth) o << " " << NumberText(JsonNumber(row, "truth"), "%.5g") << " |";
     for (const std::string& m : methods) {
       o << " " << EstimateText(row["estimates"].value(m, json::object())) << " |";
     }
@@ -335,17 +329,17 @@ std::string ComparisonMarkdown(const json& c, const std::string& plot) {
       const std::string name = row["name"];
       if (!row.contains("description") || name.rfind("Cz", 0) != 0) continue;
       o << "- **" << name << "** = " << EstimateText(row["estimates"]["linear_kf"]);
-      if (has_truth) o << " (truth " << Format(NumberOr(row, "truth")) << ")";
+      if (has_truth) o << " (truth " << NumberText(JsonNumber(row, "truth"), "%.5g") << ")";
       for (const auto& [pair, z] : row["agreement_sigma"].items()) {
-        o << "; " << pair << ": " << Format(z.get<double>(), "%.2f") << " sigma";
+        o << "; " << pair << ": " << NumberText(z.get<double>(), "%.2f") << " sigma";
       }
       o << ". " << row["description"].get<std::string>() << ".\n";
     }
-    const double difference = NumberOr(op, "difference_in_std");
+    const double difference = JsonNumber(op, "difference_in_std");
     if (std::isfinite(difference)) {
-      o << "\nThe two values of Cz differ by " << Format(difference, "%.2f")
-        << " std of their difference"
-        << (op.value("disagree", false) ? ": they DISAGREE." : ".") << "\n";
+      o << "\nThe two values of Cz differ by " << NumberText(difference, "%.2f")
+        << " std of their difference" << (op.value("disagree", false) ? ": they DISAGREE." : ".")
+        << "\n";
     }
   }
 
@@ -358,13 +352,14 @@ std::string ComparisonMarkdown(const json& c, const std::string& plot) {
       if (!fit.is_object()) continue;
       const json v = m["validation"].value(channel, json::object());
       o << "| " << m["method"].get<std::string>() << " | " << channel << " | "
-        << Format(NumberOr(fit, "rms"), "%.4g") << " | " << Format(NumberOr(fit, "nrmse"), "%.4f")
-        << " | " << Format(NumberOr(v, "rms"), "%.4g") << " | "
-        << Format(NumberOr(v, "nrmse"), "%.4f") << " |\n";
+        << NumberText(JsonNumber(fit, "rms"), "%.4g") << " | "
+        << NumberText(JsonNumber(fit, "nrmse"), "%.4f") << " | "
+        << NumberText(JsonNumber(v, "rms"), "%.4g") << " | "
+        << NumberText(JsonNumber(v, "nrmse"), "%.4f") << " |\n";
     }
     o << "| " << m["method"].get<std::string>() << " | overall nrmse | | "
-      << Format(NumberOr(m["fit"], "overall_nrmse"), "%.4f") << " | | "
-      << Format(NumberOr(m["validation"], "overall_nrmse"), "%.4f") << " |\n";
+      << NumberText(JsonNumber(m["fit"], "overall_nrmse"), "%.4f") << " | | "
+      << NumberText(JsonNumber(m["validation"], "overall_nrmse"), "%.4f") << " |\n";
   }
   o << "\nnrmse = rms(measured - model) / rms(measured - mean). The model each method is "
        "judged by:\n\n";
@@ -385,9 +380,10 @@ Figure EstimatesFigure(const json& c) {
   const std::string reference = c.value("reference", "none");
   Figure f;
   f.columns = 4;
-  f.title = "Estimates with +-1 std bars; x: 1 linear_kf (blue), 2 output_error (red), 3 ekf "
-            "(green); open circle: not identifiable; dashed: " +
-            (reference == "none" ? std::string("no reference") : reference);
+  f.title =
+      "Estimates with +-1 std bars; x: 1 linear_kf (blue), 2 output_error (red), 3 ekf "
+      "(green); open circle: not identifiable; dashed: " +
+      (reference == "none" ? std::string("no reference") : reference);
   for (const json& row : c["parameters"]) {
     PlotPanel panel;
     panel.title = row["name"].get<std::string>();
@@ -399,27 +395,29 @@ Figure EstimatesFigure(const json& c) {
     };
     for (size_t i = 0; i < methods.size(); ++i) {
       const json e = row["estimates"].value(methods[i], json::object());
-      const double value = NumberOr(e, "value");
+      const double value = JsonNumber(e, "value");
       const std::string kind = e.value("kind", "");
       if (!std::isfinite(value) || (kind != "estimated" && kind != "not identifiable")) continue;
       const double x = i + 1.0;
       const std::string color = std::string(" lc rgb '") + Color(methods[i]) + "'";
       if (kind == "estimated") {
-        const double s = NumberOr(e, "std");
+        const double s = JsonNumber(e, "std");
         panel.series.push_back({"", {x, x}, {value - s, value + s}, "lines lw 2" + color});
         extend(value - s);
         extend(value + s);
       }
-      panel.series.push_back({methods[i], {x}, {value},
-                              (kind == "estimated" ? "points pt 7 ps 1.2" : "points pt 6 ps 1.5") +
-                                  color});
+      panel.series.push_back(
+          {methods[i],
+           {x},
+           {value},
+           (kind == "estimated" ? "points pt 7 ps 1.2" : "points pt 6 ps 1.5") + color});
       extend(value);
     }
     if (panel.series.empty()) continue;
-    double ref = NumberOr(row, "truth");
+    double ref = JsonNumber(row, "truth");
     if (reference == "output_error") {
       const json e = row["estimates"].value("output_error", json::object());
-      ref = e.value("kind", "") == "estimated" ? NumberOr(e, "value") : kNaN;
+      ref = e.value("kind", "") == "estimated" ? JsonNumber(e, "value") : kNaN;
     }
     if (std::isfinite(ref)) {
       panel.series.push_back({reference, {0.5, 3.5}, {ref, ref}, "lines dt 2 lc rgb 'black'"});

@@ -20,10 +20,9 @@
 #pragma once
 
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/plot.h"
 
@@ -31,14 +30,14 @@ namespace coaxid {
 
 // One method's run inside compare.
 struct MethodRun {
-  std::string method;                     // linear_kf, output_error, ekf
-  std::string status = "skipped";         // ran, skipped, failed
-  std::string reason;                     // why skipped or failed
-  std::vector<std::string> logs;          // estimation logs given to it
-  std::vector<std::string> validate;      // held-out logs given to it (may be empty)
-  std::string folder;                     // its output folder, relative to compare's
+  std::string method;                 // linear_kf, output_error, ekf
+  std::string status = "skipped";     // ran, skipped, failed
+  std::string reason;                 // why skipped or failed
+  std::vector<std::string> logs;      // estimation logs given to it
+  std::vector<std::string> validate;  // held-out logs given to it (may be empty)
+  std::string folder;                 // its output folder, relative to compare's
   double wall_s = std::numeric_limits<double>::quiet_NaN();  // wall time of the run [s]
-  nlohmann::json report;                  // its report.json (status ran)
+  nlohmann::json report;                                     // its report.json (status ran)
 };
 
 // The order the methods appear in every table.

@@ -58,10 +58,10 @@ std::string ReproducedText(const Log& log, const std::string& shipped_path) {
       }
     }
   }
-  return !same_shape            ? "differs in shape from the shipped log"
-         : max_difference == 0 ? "identical to the shipped log"
-                               : "differs from the shipped log by at most " +
-                                     std::to_string(max_difference);
+  return !same_shape ? "differs in shape from the shipped log"
+         : max_difference == 0
+             ? "identical to the shipped log"
+             : "differs from the shipped log by at most " + std::to_string(max_difference);
 }
 
 }  // namespace
@@ -101,8 +101,7 @@ int RunDemo() {
     entry.rows = log.NumRows();
     entry.duration_s = log.Column("t").back() - log.Column("t").front();
     const double elapsed = Since(t0);
-    std::fprintf(stderr, "%d rows in %.2f s (elapsed %.1f s)\n", entry.rows, elapsed,
-                 Since(start));
+    std::fprintf(stderr, "%d rows in %.2f s (elapsed %.1f s)\n", entry.rows, elapsed, Since(start));
     const std::string shipped = root + "/data/glmav/" + s.name + ".csv";
     entry.reproduced = ReproducedText(log, shipped);
     record.simulated.push_back(entry);
@@ -148,10 +147,13 @@ int RunDemo() {
     std::string config, title;
   };
   const Discovery discoveries[] = {
-      {"discover_simulated", {root + "/data/glmav/balance_wake.csv"}, config_path,
+      {"discover_simulated",
+       {root + "/data/glmav/balance_wake.csv"},
+       config_path,
        "Simulated balance log with an undeclared wake_interference (truth: k_T = 5e-6, "
        "k_Q = 1e-7)"},
-      {"discover_tmotor28", {real + "tmotor28_coaxial.csv", real + "tmotor28_isolated.csv"},
+      {"discover_tmotor28",
+       {real + "tmotor28_coaxial.csv", real + "tmotor28_isolated.csv"},
        root + "/configs/tmotor28.yaml",
        "Measured T-motor 28\" coaxial test-stand data (pyBEMT, MIT licence), the paper's model "
        "with one sigma"}};

@@ -6,23 +6,12 @@
 #include <sstream>
 
 #include "experiments/compare_table.h"
+#include "experiments/report_values.h"
 
 namespace coaxid {
 namespace {
 
 using json = nlohmann::json;
-
-std::string Format(double v, const char* format = "%.4g") {
-  if (!std::isfinite(v)) return "-";
-  char text[64];
-  std::snprintf(text, sizeof text, format, v);
-  return text;
-}
-
-double NumberAt(const json& object, const std::string& key) {
-  if (!object.is_object() || !object.contains(key) || !object[key].is_number()) return NAN;
-  return object[key].get<double>();
-}
 
 // A command's report as a section: its title dropped, every other heading
 // one level deeper.
@@ -82,9 +71,10 @@ void EstimatesTable(std::ostringstream& o, const json& comparison, const std::st
     // The rows on the linear method's Cz split repeat the others' one Cz.
     if (method != "linear_kf" && row.contains("description")) continue;
     o << "| " << row["name"].get<std::string>() << " | ";
-    if (truth) o << Format(NumberAt(row, "truth"), "%.5g") << " | ";
+    if (truth) o << NumberText(JsonNumber(row, "truth"), "%.5g") << " | ";
     o << EstimateText(e) << " |";
-    if (truth) o << " " << Format(NumberAt(row.value("error_sigma", json()), method), "%+.2f") << " |";
+    if (truth)
+      o << " " << NumberText(JsonNumber(row.value("error_sigma", json()), method), "%+.2f") << " |";
     o << "\n";
   }
 }
@@ -100,12 +90,14 @@ void MethodSection(std::ostringstream& o, const DemoRecord& r, const std::string
     return;
   }
   std::string logs;
-  for (const json& l : (*m)["logs"]) logs += (logs.empty() ? "`" : ", `") + l.get<std::string>() + "`";
+  for (const json& l : (*m)["logs"])
+    logs += (logs.empty() ? "`" : ", `") + l.get<std::string>() + "`";
   const std::string folder = r.compare_folder + "/" + method;
-  o << "\nLogs: " << logs << ". Held out: " << m->value("validation_data", "-")
-    << ". Wall time " << Format(NumberAt(*m, "wall_s"), "%.2f") << " s. Full output: `" << folder
-    << "/report.json`. Overall nrmse: fit " << Format(NumberAt((*m)["fit"], "overall_nrmse"), "%.3f")
-    << ", validation " << Format(NumberAt((*m)["validation"], "overall_nrmse"), "%.3f") << ".\n";
+  o << "\nLogs: " << logs << ". Held out: " << m->value("validation_data", "-") << ". Wall time "
+    << NumberText(JsonNumber(*m, "wall_s"), "%.2f") << " s. Full output: `" << folder
+    << "/report.json`. Overall nrmse: fit "
+    << NumberText(JsonNumber((*m)["fit"], "overall_nrmse"), "%.3f") << ", validation "
+    << NumberText(JsonNumber((*m)["validation"], "overall_nrmse"), "%.3f") << ".\n";
   EstimatesTable(o, r.comparison, method);
   const auto report = r.reports.find(method);
   if (report != r.reports.end()) Images(o, method, KeyPlots(report->second, folder, plot_keys, 3));
@@ -120,28 +112,32 @@ void DiscoverySection(std::ostringstream& o, const DemoDiscovery& d) {
   o << "\n\nAdded: **" << (added.empty() ? "nothing" : added) << "**";
   const json added_parameters = j.value("added_parameters", json::object());
   for (const auto& [name, p] : added_parameters.items()) {
-    o << "; " << name << " = " << Format(NumberAt(p, "value"), "%.4g");
-    if (p.contains("std") && p["std"].is_number()) o << " ± " << Format(p["std"].get<double>(), "%.2g");
+    o << "; " << name << " = " << NumberText(JsonNumber(p, "value"), "%.4g");
+    if (p.contains("std") && p["std"].is_number())
+      o << " ± " << NumberText(p["std"].get<double>(), "%.2g");
   }
   o << ". Full report: `" << d.folder << "/report.md`.\n";
   for (const json& u : j.value("unexplained", json::array())) {
-    o << "\nStill unexplained: **" << u.value("channel", "") << "**: " << u.value("why", "") << "\n";
+    o << "\nStill unexplained: **" << u.value("channel", "") << "**: " << u.value("why", "")
+      << "\n";
   }
   const json& before = j["baseline"];
   const json& after = j["final"];
   const bool validation = before["validation"].size() > 1;
   o << "\n| channel | rms before | rms after | nrmse before | nrmse after |"
-    << (validation ? " held-out nrmse before | held-out nrmse after |" : "") << "\n|---|---|---|---|---|"
-    << (validation ? "---|---|" : "") << "\n";
+    << (validation ? " held-out nrmse before | held-out nrmse after |" : "")
+    << "\n|---|---|---|---|---|" << (validation ? "---|---|" : "") << "\n";
   for (const auto& [channel, b] : before["fit"].items()) {
     if (!b.is_object()) continue;
     const json a = after["fit"].value(channel, json::object());
-    o << "| " << channel << " | " << Format(NumberAt(b, "rms")) << " | "
-      << Format(NumberAt(a, "rms")) << " | " << Format(NumberAt(b, "nrmse"), "%.3f") << " | "
-      << Format(NumberAt(a, "nrmse"), "%.3f") << " |";
+    o << "| " << channel << " | " << NumberText(JsonNumber(b, "rms")) << " | "
+      << NumberText(JsonNumber(a, "rms")) << " | " << NumberText(JsonNumber(b, "nrmse"), "%.3f")
+      << " | " << NumberText(JsonNumber(a, "nrmse"), "%.3f") << " |";
     if (validation) {
-      o << " " << Format(NumberAt(before["validation"].value(channel, json()), "nrmse"), "%.3f")
-        << " | " << Format(NumberAt(after["validation"].value(channel, json()), "nrmse"), "%.3f")
+      o << " "
+        << NumberText(JsonNumber(before["validation"].value(channel, json()), "nrmse"), "%.3f")
+        << " | "
+        << NumberText(JsonNumber(after["validation"].value(channel, json()), "nrmse"), "%.3f")
         << " |";
     }
     o << "\n";
@@ -162,16 +158,16 @@ std::string DemoReportMarkdown(const DemoRecord& r) {
        "what a declared model lacks, on a simulated log and on measured test-stand data.\n\n"
     << "| step | wall time [s] |\n|---|---|\n";
   for (const auto& [step, seconds] : r.step_seconds) {
-    o << "| " << step << " | " << Format(seconds, "%.1f") << " |\n";
+    o << "| " << step << " | " << NumberText(seconds, "%.1f") << " |\n";
   }
-  o << "| total | " << Format(r.total_s, "%.1f") << " |\n";
+  o << "| total | " << NumberText(r.total_s, "%.1f") << " |\n";
 
   o << "\n## 1. Simulation: the shipped logs from their seeds\n\n"
     << "| scenario | seed | rows | simulated [s] | log | truth | against the shipped log |\n"
        "|---|---|---|---|---|---|---|\n";
   for (const DemoSimulatedLog& s : r.simulated) {
     o << "| " << s.scenario << " | " << s.seed << " | " << s.rows << " | "
-      << Format(s.duration_s, "%.1f") << " | `" << s.log << "` | `" << s.truth << "` | "
+      << NumberText(s.duration_s, "%.1f") << " | `" << s.log << "` | `" << s.truth << "` | "
       << s.reproduced << " |\n";
   }
 
@@ -192,7 +188,8 @@ std::string DemoReportMarkdown(const DemoRecord& r) {
                 "value because flight logs alone fix only ratios (model.md decision 8).",
                 {"parameters", "fit", "innovations"});
 
-  o << "\n## 5. The three compared (`coaxid compare`)\n\nReport paths in this section's tables are relative to `"
+  o << "\n## 5. The three compared (`coaxid compare`)\n\nReport paths in this section's tables are "
+       "relative to `"
     << r.compare_folder << "/`.\n\n"
     << AsSection(ComparisonMarkdown(r.comparison, r.compare_folder + "/plots/estimates.png"));
 

@@ -10,11 +10,10 @@
 
 #include <cstdint>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace coaxid {
 
@@ -23,8 +22,8 @@ struct DemoSimulatedLog {
   uint64_t seed = 0;
   std::string log, truth;  // relative to DIR
   int rows = 0;
-  double duration_s = 0;    // simulated time
-  std::string reproduced;   // against the shipped log
+  double duration_s = 0;   // simulated time
+  std::string reproduced;  // against the shipped log
 };
 
 struct DemoDiscovery {

@@ -152,8 +152,7 @@ nlohmann::json IdentifyLinearKf(const IdentifyRun& run) {
   Require(run.config, "config");
   Require(run.out, "out");
   if (!(run.holdout_fraction >= 0 && run.holdout_fraction < 1)) {
-    throw InputError("--holdout_fraction must lie in [0, 1), got " +
-                     Number(run.holdout_fraction));
+    throw InputError("--holdout_fraction must lie in [0, 1), got " + Number(run.holdout_fraction));
   }
   if (!(FLAGS_process_noise >= 0 && std::isfinite(FLAGS_process_noise))) {
     throw InputError("--process_noise must be finite and >= 0, got " + Number(FLAGS_process_noise));

@@ -6,9 +6,8 @@
 // from their flags, so compare and demo honour them too.
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace coaxid {
 

@@ -11,9 +11,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "core/atomic_file.h"
 #include "experiments/demo_report.h"
@@ -37,9 +36,9 @@ class CompareCliTest : public CliTestDir {
                        bool with_truth = false) {
     const std::string scenario = Path(name + ".yaml");
     std::ofstream(scenario) << scenario_text << kTruth;
-    const RunResult r =
-        RunCoaxid("simulate --config=" + config_ + " --scenario=" + scenario + " --out=" +
-                  Path(name + ".csv") + (with_truth ? " --truth=" + Path(name + ".truth.json") : ""));
+    const RunResult r = RunCoaxid("simulate --config=" + config_ + " --scenario=" + scenario +
+                                  " --out=" + Path(name + ".csv") +
+                                  (with_truth ? " --truth=" + Path(name + ".truth.json") : ""));
     EXPECT_EQ(r.status, 0) << r.output;
     return Path(name + ".csv");
   }
@@ -48,7 +47,8 @@ class CompareCliTest : public CliTestDir {
     return Simulate("balance",
                     "scenario: balance\nseed: 5\nbalance:\n  rate_hz: 50\n  hold_s: 0.5\n"
                     "  omega1: [0, 110, 135, 160]\n  omega2: [0, 110, 135, 160]\n"
-                    "  delta_cx: " + deltas + "\n  delta_cy: " + deltas + "\n");
+                    "  delta_cx: " +
+                        deltas + "\n  delta_cy: " + deltas + "\n");
   }
   // 5 s of excited closed-loop hover at 200 Hz.
   std::string Flight() {
@@ -134,8 +134,7 @@ TEST_F(CompareCliTest, TableHasAllThreeMethodsConsistentFiguresAndTheCzSplit) {
   // uncertain). Except one known bias: linear_kf takes d from the config
   // (0.10 m; truth 0.11 m) and fixes beta through L, M = d beta (...), so its
   // beta is the truth scaled by d_truth / d_config (model.md decision 6).
-  const double d_ratio =
-      truth["d"].get<double>() / Value(Row(c, "d")["estimates"]["linear_kf"]);
+  const double d_ratio = truth["d"].get<double>() / Value(Row(c, "d")["estimates"]["linear_kf"]);
   for (const std::string& method : methods) {
     for (const char* name : {"alpha", "beta"}) {
       const json& row = Row(c, name);
@@ -161,10 +160,10 @@ TEST_F(CompareCliTest, TableHasAllThreeMethodsConsistentFiguresAndTheCzSplit) {
   EXPECT_NEAR(Row(c, "Cz_beta")["truth"].get<double>(), Cz * truth["beta"].get<double>(), 1e-15);
   EXPECT_EQ(Row(c, "Cz")["estimates"]["linear_kf"]["kind"], "over-parameterised");
   const json& from_alpha = Row(c, "Cz = Cz_alpha / alpha");
-  EXPECT_NEAR(Value(from_alpha["estimates"]["linear_kf"]),
-              Value(cz_alpha["estimates"]["linear_kf"]) /
-                  Value(Row(c, "alpha")["estimates"]["linear_kf"]),
-              1e-9);
+  EXPECT_NEAR(
+      Value(from_alpha["estimates"]["linear_kf"]),
+      Value(cz_alpha["estimates"]["linear_kf"]) / Value(Row(c, "alpha")["estimates"]["linear_kf"]),
+      1e-9);
   EXPECT_TRUE(from_alpha["estimates"].contains("output_error"));
   EXPECT_TRUE(Row(c, "Cz = Cz_beta / beta")["estimates"].contains("ekf"));
   ASSERT_TRUE(c.contains("over_parameterisation"));
@@ -195,7 +194,9 @@ TEST_F(CompareCliTest, TableHasAllThreeMethodsConsistentFiguresAndTheCzSplit) {
       ++images;
     }
   }
-  if (c["plots"].size() > 0) EXPECT_GE(images, 4);  // gnuplot present: plots per step
+  if (c["plots"].size() > 0) {  // gnuplot present: the estimates and each method's plots
+    EXPECT_GE(images, 4);
+  }
 }
 
 TEST_F(CompareCliTest, SkipsAMethodWithoutItsKindOfLog) {
@@ -247,8 +248,7 @@ TEST_F(CompareCliTest, BadInputExitsTwoAndWritesNothing) {
   EXPECT_TRUE(Contains(r.output, "linear_kf: ")) << r.output;
   EXPECT_FALSE(fs::exists(out));
   for (const fs::directory_entry& e : fs::directory_iterator(dir_)) {
-    EXPECT_EQ(e.path().filename().string().find("compare-partial"), std::string::npos)
-        << e.path();
+    EXPECT_EQ(e.path().filename().string().find("compare-partial"), std::string::npos) << e.path();
   }
 }
 
@@ -260,8 +260,9 @@ TEST(MarkdownToHtml, RendersTheReportsMarkdownAsOnePage) {
   EXPECT_TRUE(Contains(html, "<!DOCTYPE html>"));
   EXPECT_TRUE(Contains(html, "<title>T</title>"));
   EXPECT_TRUE(Contains(html, "<h1>Title &lt;1&gt;</h1>"));
-  EXPECT_TRUE(Contains(html, "<p>Some <strong>bold</strong> and <code>code</code> text "
-                             "continued.</p>"));
+  EXPECT_TRUE(Contains(html,
+                       "<p>Some <strong>bold</strong> and <code>code</code> text "
+                       "continued.</p>"));
   EXPECT_TRUE(Contains(html, "<tr><th>a</th><th>b</th></tr>"));
   EXPECT_TRUE(Contains(html, "<tr><td>1</td><td>x &lt; y</td></tr>"));
   EXPECT_TRUE(Contains(html, "<li><a href=\"t.md\">two</a></li>"));
