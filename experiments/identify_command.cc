@@ -123,30 +123,49 @@ void PrintEstimates(const LinearBaselineResult& r) {
 }  // namespace
 
 int RunIdentify() {
+  Identify(IdentifyRunFromFlags());
+  return 0;
+}
+
+IdentifyRun IdentifyRunFromFlags() {
+  IdentifyRun run;
+  run.method = FLAGS_method;
+  run.logs = FLAGS_logs;
+  run.validate = FLAGS_validate;
+  run.config = FLAGS_config;
+  run.out = FLAGS_out;
+  run.holdout_fraction = FLAGS_holdout_fraction;
+  return run;
+}
+
+nlohmann::json Identify(const IdentifyRun& run) {
+  Require(run.method, "method");
+  CheckMethod(run.method);
+  if (run.method == "output_error") return IdentifyOutputError(run);
+  if (run.method == "ekf") return IdentifyEkf(run);
+  return IdentifyLinearKf(run);
+}
+
+nlohmann::json IdentifyLinearKf(const IdentifyRun& run) {
   const auto start = std::chrono::steady_clock::now();
-  Require(FLAGS_method, "method");
-  CheckMethod(FLAGS_method);
-  if (FLAGS_method == "output_error") return RunIdentifyOutputError();
-  if (FLAGS_method == "ekf") return RunIdentifyEkf();
-  Require(FLAGS_logs, "logs");
-  Require(FLAGS_config, "config");
-  Require(FLAGS_out, "out");
-  if (!(FLAGS_holdout_fraction >= 0 && FLAGS_holdout_fraction < 1)) {
-    throw InputError("--holdout_fraction must lie in [0, 1), got " +
-                     Number(FLAGS_holdout_fraction));
+  Require(run.logs, "logs");
+  Require(run.config, "config");
+  Require(run.out, "out");
+  if (!(run.holdout_fraction >= 0 && run.holdout_fraction < 1)) {
+    throw InputError("--holdout_fraction must lie in [0, 1), got " + Number(run.holdout_fraction));
   }
   if (!(FLAGS_process_noise >= 0 && std::isfinite(FLAGS_process_noise))) {
     throw InputError("--process_noise must be finite and >= 0, got " + Number(FLAGS_process_noise));
   }
   std::error_code ec;
-  if (fs::exists(FLAGS_out, ec) && !fs::is_directory(FLAGS_out, ec)) {
-    throw InputError("--out=" + FLAGS_out + " exists and is not a folder");
+  if (fs::exists(run.out, ec) && !fs::is_directory(run.out, ec)) {
+    throw InputError("--out=" + run.out + " exists and is not a folder");
   }
-  const std::vector<std::string> paths = SplitList(FLAGS_logs);
-  const std::vector<std::string> validate_paths = SplitList(FLAGS_validate);
+  const std::vector<std::string> paths = SplitList(run.logs);
+  const std::vector<std::string> validate_paths = SplitList(run.validate);
   if (paths.empty()) throw InputError("--logs names no file");
 
-  const Vehicle vehicle = LoadVehicle(FLAGS_config);
+  const Vehicle vehicle = LoadVehicle(run.config);
   std::fprintf(stderr, "identify: reading %zu log(s)%s\n", paths.size(),
                validate_paths.empty() ? "" : " and the validation logs");
   const std::vector<Log> logs = ReadBalanceLogs(paths, "logs");
@@ -162,13 +181,13 @@ int RunIdentify() {
     for (const Log& log : logs) estimation.push_back(MakeBalanceData(log));
     for (const Log& log : validate_logs) validation.push_back(MakeBalanceData(log));
     validation_description = "the --validate logs, whole";
-  } else if (FLAGS_holdout_fraction > 0) {
+  } else if (run.holdout_fraction > 0) {
     validation_description =
         "held out (contiguous final part of each log, cut at a hold "
         "boundary, --holdout_fraction=" +
-        Number(FLAGS_holdout_fraction) + "):";
+        Number(run.holdout_fraction) + "):";
     for (const Log& log : logs) {
-      const int cut = HoldoutStartRow(log, FLAGS_holdout_fraction);
+      const int cut = HoldoutStartRow(log, run.holdout_fraction);
       estimation.push_back(MakeBalanceData(log, 0, cut));
       validation.push_back(MakeBalanceData(log, cut));
       validation_description += " " + log.source + " rows " + std::to_string(cut + 1) + "-" +
@@ -200,7 +219,7 @@ int RunIdentify() {
                result.kf.updates);
 
   // Everything is known: only now write.
-  const std::string dir = FLAGS_out;
+  const std::string dir = run.out;
   fs::create_directories(dir + "/plots", ec);
   if (ec || !fs::is_directory(dir + "/plots")) {
     throw InputError("cannot create output folder '" + dir + "': " + ec.message());
@@ -254,11 +273,12 @@ int RunIdentify() {
     context.outputs["plots_skipped"] = plot_error;
     context.notes.push_back("plots skipped: " + plot_error);
   }
-  WriteJson(dir + "/report.json", LinearBaselineReportJson(result, vehicle.parameters, context));
-  PrintEstimates(result);
+  const nlohmann::json report = LinearBaselineReportJson(result, vehicle.parameters, context);
+  WriteJson(dir + "/report.json", report);
+  if (run.print_estimates) PrintEstimates(result);
   std::fprintf(stderr, "identify: done in %.2f s -> %s/report.json%s\n", Seconds(start),
                dir.c_str(), plot_error.empty() ? "" : " (plots skipped)");
-  return 0;
+  return report;
 }
 
 std::string LinearKfCheckText(const std::vector<Log>& logs, const std::string& config_path) {

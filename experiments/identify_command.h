@@ -16,13 +16,28 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/log.h"
+#include "experiments/identify_run.h"
 
 namespace coaxid {
 
 // Runs `identify` from the parsed flags. Returns the exit status; throws
 // InputError (bad input) or ComputationError (a failed estimation).
 int RunIdentify();
+
+// The identify run the flags describe (--method, --logs, --validate,
+// --config, --out, --holdout_fraction).
+IdentifyRun IdentifyRunFromFlags();
+
+// Runs one method (linear_kf, output_error or ekf), writes run.out and
+// returns its report.json document. Throws InputError / ComputationError
+// with run.out untouched.
+nlohmann::json Identify(const IdentifyRun& run);
+
+// The linear_kf method alone (what Identify runs for method linear_kf).
+nlohmann::json IdentifyLinearKf(const IdentifyRun& run);
 
 // The linear_kf excitation check of each log (and of all balance logs
 // together when there are several), as text for `coaxid check`. Flight logs

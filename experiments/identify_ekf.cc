@@ -130,14 +130,14 @@ void PrintEstimates(const EkfResult& r) {
 
 }  // namespace
 
-int RunIdentifyEkf() {
+nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   const Clock::time_point start = Clock::now();
-  Require(FLAGS_logs, "logs");
-  Require(FLAGS_config, "config");
-  Require(FLAGS_out, "out");
-  if (!(FLAGS_holdout_fraction >= 0 && FLAGS_holdout_fraction < 1)) {
+  Require(run.logs, "logs");
+  Require(run.config, "config");
+  Require(run.out, "out");
+  if (!(run.holdout_fraction >= 0 && run.holdout_fraction < 1)) {
     throw InputError("--holdout_fraction must lie in [0, 1), got " +
-                     std::to_string(FLAGS_holdout_fraction));
+                     std::to_string(run.holdout_fraction));
   }
   if (!(FLAGS_ekf_window_s > 0 && std::isfinite(FLAGS_ekf_window_s))) {
     throw InputError("--ekf_window_s must be > 0, got " + std::to_string(FLAGS_ekf_window_s));
@@ -171,14 +171,14 @@ int RunIdentifyEkf() {
   }
   options.noise_adaptations = FLAGS_ekf_noise_adaptations;
   std::error_code ec;
-  if (fs::exists(FLAGS_out, ec) && !fs::is_directory(FLAGS_out, ec)) {
-    throw InputError("--out=" + FLAGS_out + " exists and is not a folder");
+  if (fs::exists(run.out, ec) && !fs::is_directory(run.out, ec)) {
+    throw InputError("--out=" + run.out + " exists and is not a folder");
   }
-  const std::vector<std::string> paths = SplitList(FLAGS_logs);
-  const std::vector<std::string> validate_paths = SplitList(FLAGS_validate);
+  const std::vector<std::string> paths = SplitList(run.logs);
+  const std::vector<std::string> validate_paths = SplitList(run.validate);
   if (paths.empty()) throw InputError("--logs names no file");
 
-  Vehicle vehicle = LoadVehicle(FLAGS_config);
+  Vehicle vehicle = LoadVehicle(run.config);
   EkfReportContext context;
   if (!FLAGS_ekf_initial_report.empty()) {
     context.notes.push_back(ApplyInitialReport(FLAGS_ekf_initial_report, &vehicle, &options));
@@ -190,7 +190,7 @@ int RunIdentifyEkf() {
   const std::vector<Log> validate_logs = ReadFlightLogs(validate_paths, "validate");
 
   // Estimation and validation data (experiments/estimation_io.h).
-  LogSplit split = SplitEstimationAndValidation(logs, validate_logs, FLAGS_holdout_fraction);
+  LogSplit split = SplitEstimationAndValidation(logs, validate_logs, run.holdout_fraction);
   std::vector<EstimationLog>& estimation = split.estimation;
   std::vector<EstimationLog>& validation = split.validation;
   context.validation_description = split.description;
@@ -283,7 +283,7 @@ int RunIdentifyEkf() {
   }
 
   // Everything is known: only now write.
-  const std::string dir = FLAGS_out;
+  const std::string dir = run.out;
   fs::create_directories(dir + "/plots", ec);
   if (ec || !fs::is_directory(dir + "/plots")) {
     throw InputError("cannot create output folder '" + dir + "': " + ec.message());
@@ -319,11 +319,12 @@ int RunIdentifyEkf() {
     context.notes.push_back("plots skipped: " + plot_error);
   }
   context.notes.push_back("Validation data: " + context.validation_description + ".");
-  WriteJson(dir + "/report.json", EkfReportJson(result, options, initial, context));
-  PrintEstimates(result);
+  const nlohmann::json report = EkfReportJson(result, options, initial, context);
+  WriteJson(dir + "/report.json", report);
+  if (run.print_estimates) PrintEstimates(result);
   std::fprintf(stderr, "identify: ekf: done in %.2f s -> %s/report.json%s\n", Since(start),
                dir.c_str(), plot_error.empty() ? "" : " (plots skipped)");
-  return 0;
+  return report;
 }
 
 }  // namespace coaxid

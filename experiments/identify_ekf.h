@@ -29,10 +29,14 @@
 // to stdout.
 #pragma once
 
+#include <nlohmann/json.hpp>
+
+#include "experiments/identify_run.h"
+
 namespace coaxid {
 
-// Runs `identify --method=ekf` from the parsed flags. Returns the exit
-// status; throws InputError (bad input) or ComputationError (failed filter).
-int RunIdentifyEkf();
+// Runs the EKF on run's logs, writes run.out and returns its report.json;
+// throws InputError (bad input) or ComputationError (failed filter).
+nlohmann::json IdentifyEkf(const IdentifyRun& run);
 
 }  // namespace coaxid

@@ -101,26 +101,43 @@ nlohmann::json ParametersJson(const ParameterSet& estimates, const Identifiabili
   return out;
 }
 
+void PrintEstimates(const OutputErrorResult& result) {
+  std::printf("output_error estimates (Cramér-Rao std%s):\n",
+              result.coloured_residuals.applied ? ", corrected for coloured residuals" : "");
+  for (int k = 0; k < static_cast<int>(result.identifiability.names.size()); ++k) {
+    const std::string& name = result.identifiability.names[k];
+    const double value = result.parameters.Value(name);
+    if (result.identifiability.identifiable[k]) {
+      std::printf("  %-22s % .6e +- %.2e\n", name.c_str(), value, result.identifiability.std[k]);
+    } else {
+      std::printf("  %-22s % .6e   not identifiable from these logs\n", name.c_str(), value);
+    }
+  }
+  for (const NullDirection& n : result.identifiability.null_directions) {
+    std::printf("  note: %s\n", n.explanation.c_str());
+  }
+}
+
 }  // namespace
 
-int RunIdentifyOutputError() {
+nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
   const auto start = Clock::now();
-  Require(FLAGS_logs, "logs");
-  Require(FLAGS_config, "config");
-  Require(FLAGS_out, "out");
+  Require(run.logs, "logs");
+  Require(run.config, "config");
+  Require(run.out, "out");
   if (FLAGS_start != "config" && FLAGS_start != "linear_kf") {
     throw InputError("--start must be config or linear_kf, got '" + FLAGS_start + "'");
   }
   std::error_code ec;
-  if (fs::exists(FLAGS_out, ec) && !fs::is_directory(FLAGS_out, ec)) {
-    throw InputError("--out=" + FLAGS_out + " exists and is not a folder");
+  if (fs::exists(run.out, ec) && !fs::is_directory(run.out, ec)) {
+    throw InputError("--out=" + run.out + " exists and is not a folder");
   }
-  Vehicle vehicle = LoadVehicle(FLAGS_config);
+  Vehicle vehicle = LoadVehicle(run.config);
   std::vector<Log> logs, validate;
-  for (const std::string& path : SplitList(FLAGS_logs)) logs.push_back(ReadLog(path));
-  for (const std::string& path : SplitList(FLAGS_validate)) validate.push_back(ReadLog(path));
+  for (const std::string& path : SplitList(run.logs)) logs.push_back(ReadLog(path));
+  for (const std::string& path : SplitList(run.validate)) validate.push_back(ReadLog(path));
   if (logs.empty()) throw InputError("--logs names no file");
-  const LogSplit split = SplitEstimationAndValidation(logs, validate, FLAGS_holdout_fraction);
+  const LogSplit split = SplitEstimationAndValidation(logs, validate, run.holdout_fraction);
 
   OutputErrorOptions options;
   options.segment_schedule_s = {std::min(0.25, FLAGS_segment_s), FLAGS_segment_s};
@@ -173,7 +190,7 @@ int RunIdentifyOutputError() {
   }
 
   // Everything is known: only now write.
-  const std::string dir = FLAGS_out;
+  const std::string dir = run.out;
   fs::create_directories(dir + "/plots", ec);
   if (ec || !fs::is_directory(dir + "/plots")) {
     throw InputError("cannot create output folder '" + dir + "': " + ec.message());
@@ -240,22 +257,9 @@ int RunIdentifyOutputError() {
   report["validation"]["description"] = split.description;
   WriteJson(dir + "/report.json", report);
 
-  std::printf("output_error estimates (Cramér-Rao std%s):\n",
-              result.coloured_residuals.applied ? ", corrected for coloured residuals" : "");
-  for (int k = 0; k < static_cast<int>(result.identifiability.names.size()); ++k) {
-    const std::string& name = result.identifiability.names[k];
-    const double value = result.parameters.Value(name);
-    if (result.identifiability.identifiable[k]) {
-      std::printf("  %-22s % .6e +- %.2e\n", name.c_str(), value, result.identifiability.std[k]);
-    } else {
-      std::printf("  %-22s % .6e   not identifiable from these logs\n", name.c_str(), value);
-    }
-  }
-  for (const NullDirection& n : result.identifiability.null_directions) {
-    std::printf("  note: %s\n", n.explanation.c_str());
-  }
+  if (run.print_estimates) PrintEstimates(result);
   std::fprintf(stderr, "identify: done in %.1f s -> %s/report.json\n", Since(start), dir.c_str());
-  return 0;
+  return report;
 }
 
 }  // namespace coaxid

@@ -13,8 +13,13 @@
 // that fails exits 1 and writes nothing.
 #pragma once
 
+#include <nlohmann/json.hpp>
+
+#include "experiments/identify_run.h"
+
 namespace coaxid {
 
-int RunIdentifyOutputError();
+// Runs the method on run's logs, writes run.out, returns its report.json.
+nlohmann::json IdentifyOutputError(const IdentifyRun& run);
 
 }  // namespace coaxid

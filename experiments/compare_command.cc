@@ -1,0 +1,225 @@
+#include "experiments/compare_command.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "core/atomic_file.h"
+#include "core/errors.h"
+#include "core/log.h"
+#include "core/plot.h"
+#include "core/report.h"
+#include "core/vehicle_config.h"
+#include "experiments/cli.h"
+#include "experiments/cli_flags.h"
+#include "experiments/compare_table.h"
+#include "experiments/identify_command.h"
+
+namespace coaxid {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+constexpr const char* kCompareUsage =
+    "usage: coaxid compare --logs=A.csv[,B.csv...] --config=F --out=DIR [--validate=C.csv,...] "
+    "[--holdout_fraction=0.2] [--truth=T.json]";
+
+double Since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+void Require(const std::string& value, const char* flag) {
+  if (value.empty()) throw InputError(std::string("missing --") + flag + "\n" + kCompareUsage);
+}
+
+std::string Join(const std::vector<std::string>& parts) {
+  std::string out;
+  for (const std::string& p : parts) out += (out.empty() ? "" : ",") + p;
+  return out;
+}
+
+// The paths of the given logs, balance and flight apart. Reads (and so
+// checks) every log.
+void SortLogs(const std::vector<std::string>& paths, std::vector<std::string>* balance,
+              std::vector<std::string>* flight) {
+  for (const std::string& path : paths) {
+    (ReadLog(path).kind == LogKind::kBalance ? balance : flight)->push_back(path);
+  }
+}
+
+json ReadTruth(const std::string& path) {
+  if (path.empty()) return nullptr;
+  json truth;
+  try {
+    truth = json::parse(ReadFile(path));
+  } catch (const json::exception& e) {
+    throw InputError(path + ": not a JSON document (" + e.what() + ")");
+  }
+  if (!truth.is_object() || !truth.contains("parameters") || !truth["parameters"].is_object()) {
+    throw InputError(path + ": no \"parameters\" object (truth.json of cli-and-reports.md)");
+  }
+  for (const auto& [name, value] : truth["parameters"].items()) {
+    if (!value.is_number()) {
+      throw InputError(path + ": parameters." + name + " is not a number");
+    }
+  }
+  return truth["parameters"];
+}
+
+// A folder next to out for the runs until everything succeeded.
+fs::path StagingFolder(const std::string& out) {
+  fs::path target = fs::path(out).lexically_normal();
+  if (target.filename().empty()) target = target.parent_path();
+  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  return parent /
+         ("." + target.filename().string() + ".compare-partial-" + std::to_string(::getpid()));
+}
+
+// Moves everything in staging into out (replacing what is there), then
+// removes staging.
+void Publish(const fs::path& staging, const std::string& out) {
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec || !fs::is_directory(out)) {
+    throw InputError("cannot create output folder '" + out + "': " + ec.message());
+  }
+  for (const fs::directory_entry& entry : fs::directory_iterator(staging)) {
+    const fs::path target = fs::path(out) / entry.path().filename();
+    fs::remove_all(target);
+    fs::rename(entry.path(), target);
+  }
+  fs::remove_all(staging);
+}
+
+}  // namespace
+
+json Compare(const CompareRequest& request) {
+  const Clock::time_point start = Clock::now();
+  Require(request.logs, "logs");
+  Require(request.config, "config");
+  Require(request.out, "out");
+  if (!(request.holdout_fraction >= 0 && request.holdout_fraction < 1)) {
+    throw InputError("--holdout_fraction must lie in [0, 1), got " +
+                     std::to_string(request.holdout_fraction));
+  }
+  std::error_code ec;
+  if (fs::exists(request.out, ec) && !fs::is_directory(request.out, ec)) {
+    throw InputError("--out=" + request.out + " exists and is not a folder");
+  }
+  // Every input is read and checked before any method runs.
+  LoadVehicleConfig(request.config);
+  const std::vector<std::string> paths = SplitList(request.logs);
+  if (paths.empty()) throw InputError("--logs names no file");
+  std::vector<std::string> balance, flight, validate_balance, validate_flight;
+  SortLogs(paths, &balance, &flight);
+  SortLogs(SplitList(request.validate), &validate_balance, &validate_flight);
+  const json truth = ReadTruth(request.truth);
+
+  std::vector<MethodRun> runs(3);
+  runs[0].method = "linear_kf";
+  runs[0].logs = balance;
+  runs[0].validate = validate_balance;
+  if (balance.empty()) {
+    runs[0].reason = "no balance log in --logs (linear_kf is the paper's static balance method)";
+  }
+  runs[1].method = "output_error";
+  runs[1].logs = paths;
+  runs[1].validate = SplitList(request.validate);
+  runs[2].method = "ekf";
+  runs[2].logs = flight;
+  runs[2].validate = validate_flight;
+  if (flight.empty()) {
+    runs[2].reason =
+        "no flight log in --logs (the EKF estimates states and parameters from "
+        "flight logs)";
+  }
+
+  const fs::path staging = StagingFolder(request.out);
+  fs::remove_all(staging);
+  json comparison;
+  std::string markdown;
+  try {
+    fs::create_directories(staging / "plots", ec);
+    if (ec) throw InputError("cannot create '" + staging.string() + "': " + ec.message());
+    int done = 0;
+    for (MethodRun& run : runs) {
+      if (!run.reason.empty()) {
+        std::fprintf(stderr, "compare: %s skipped: %s\n", run.method.c_str(), run.reason.c_str());
+        continue;
+      }
+      std::fprintf(stderr, "compare: [%d/3] %s on %zu log(s) (elapsed %.1f s) ...\n", ++done,
+                   run.method.c_str(), run.logs.size(), Since(start));
+      IdentifyRun identify;
+      identify.method = run.method;
+      identify.logs = Join(run.logs);
+      identify.validate = Join(run.validate);
+      identify.config = request.config;
+      identify.out = (staging / run.method).string();
+      identify.holdout_fraction = request.holdout_fraction;
+      identify.print_estimates = false;
+      run.folder = run.method;
+      const Clock::time_point t0 = Clock::now();
+      try {
+        run.report = Identify(identify);
+        run.status = "ran";
+      } catch (const ComputationError& e) {
+        run.status = "failed";
+        run.reason = e.what();
+        std::fprintf(stderr, "compare: %s failed: %s\n", run.method.c_str(), e.what());
+      } catch (const InputError& e) {
+        throw InputError(run.method + ": " + e.what());
+      }
+      run.wall_s = Since(t0);
+      std::fprintf(stderr, "compare: %s %s in %.2f s\n", run.method.c_str(), run.status.c_str(),
+                   run.wall_s);
+    }
+    bool any_ran = false;
+    std::string why;
+    for (const MethodRun& run : runs) {
+      any_ran = any_ran || run.status == "ran";
+      why += "; " + run.method + ": " + run.reason;
+    }
+    if (!any_ran) throw ComputationError("no method gave estimates" + why);
+
+    comparison = ComparisonJson(runs, truth);
+    comparison["logs"] = paths;
+    comparison["validate"] = SplitList(request.validate);
+    comparison["config"] = request.config;
+    comparison["truth"] = request.truth.empty() ? json(nullptr) : json(request.truth);
+    comparison["holdout_fraction"] = request.holdout_fraction;
+    std::string plot_error;
+    std::string plot = "plots/estimates.png";
+    if (!RenderFigure(EstimatesFigure(comparison), (staging / plot).string(), &plot_error)) {
+      plot.clear();
+      comparison["plots_skipped"] = plot_error;
+    }
+    comparison["plots"] = plot.empty() ? json::array() : json::array({plot});
+    markdown = ComparisonMarkdown(comparison, plot);
+    if (!plot_error.empty()) markdown += "\nPlots skipped: " + plot_error + "\n";
+    WriteJson((staging / "compare.json").string(), comparison);
+    WriteFileAtomically((staging / "compare.md").string(), markdown);
+    Publish(staging, request.out);
+  } catch (...) {
+    fs::remove_all(staging, ec);
+    throw;
+  }
+  if (request.print_table) std::cout << markdown;
+  std::fprintf(stderr, "compare: done in %.1f s -> %s/compare.md\n", Since(start),
+               request.out.c_str());
+  return comparison;
+}
+
+int RunCompare() {
+  const IdentifyRun flags = IdentifyRunFromFlags();
+  Compare(
+      {flags.logs, flags.validate, flags.config, flags.out, FLAGS_truth, flags.holdout_fraction});
+  return 0;
+}
+
+}  // namespace coaxid

@@ -1,0 +1,23 @@
+#include "experiments/report_values.h"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace coaxid {
+
+double JsonNumber(const nlohmann::json& object, const std::string& key) {
+  if (!object.is_object() || !object.contains(key) || !object[key].is_number()) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  return object[key].get<double>();
+}
+
+std::string NumberText(double v, const char* format) {
+  if (!std::isfinite(v)) return "-";
+  char text[64];
+  std::snprintf(text, sizeof text, format, v);
+  return text;
+}
+
+}  // namespace coaxid

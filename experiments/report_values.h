@@ -1,0 +1,18 @@
+// Numbers in and out of the JSON reports: read one (NaN when it is missing or
+// null, as reports write a NaN) and write one into a Markdown table ("-" when
+// it is not finite).
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace coaxid {
+
+// object[key] as a number; NaN when object is not an object, lacks key, or
+// holds something else there.
+double JsonNumber(const nlohmann::json& object, const std::string& key);
+
+// v printed with the printf format; "-" when v is NaN or infinite.
+std::string NumberText(double v, const char* format = "%.4g");
+
+}  // namespace coaxid
