@@ -16,6 +16,7 @@
 #include "experiments/discover_command.h"
 #include "experiments/log_summary.h"
 #include "experiments/markdown_html.h"
+#include "experiments/report_values.h"
 #include "experiments/scenario.h"
 #include "experiments/simulate_experiment.h"
 
@@ -61,7 +62,9 @@ std::string ReproducedText(const Log& log, const std::string& shipped_path) {
   return !same_shape ? "differs in shape from the shipped log"
          : max_difference == 0
              ? "identical to the shipped log"
-             : "differs from the shipped log by at most " + std::to_string(max_difference);
+             : "differs from the shipped log by at most " + NumberText(max_difference, "%.2g") +
+                   (max_difference < 1e-9 ? " (floating-point rounding: a different build wrote it)"
+                                          : "");
 }
 
 }  // namespace
