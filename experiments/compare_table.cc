@@ -6,7 +6,7 @@
 #include <set>
 #include <sstream>
 
-#include "experiments/report_values.h"
+#include "core/report_values.h"
 
 namespace coaxid {
 namespace {

@@ -16,7 +16,7 @@
 #include "experiments/discover_command.h"
 #include "experiments/log_summary.h"
 #include "experiments/markdown_html.h"
-#include "experiments/report_values.h"
+#include "core/report_values.h"
 #include "experiments/scenario.h"
 #include "experiments/simulate_experiment.h"
 

@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "experiments/compare_table.h"
-#include "experiments/report_values.h"
+#include "core/report_values.h"
 
 namespace coaxid {
 namespace {

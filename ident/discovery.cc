@@ -7,6 +7,7 @@
 
 #include "core/errors.h"
 #include "core/report.h"
+#include "core/report_values.h"
 
 namespace coaxid {
 namespace {
@@ -19,18 +20,6 @@ void Say(const DiscoveryOptions& o, const std::string& line) {
 
 double Seconds(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
-std::string Number(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3g", v);
-  return text;
-}
-
-std::string Elapsed(double seconds) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.1f s", seconds);
-  return text;
 }
 
 ModelSnapshot Snapshot(const Vehicle& vehicle, const OutputErrorResult& r,
@@ -151,7 +140,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
 
   CandidatePass pass = LinearisePass(current, fit, estimation, o.fit);
   Say(options, "discover: sensitivities of " + std::to_string(pass.candidates.size()) +
-                   " candidate effects along the fit: " + Elapsed(pass.seconds));
+                   " candidate effects along the fit: " + NumberText(pass.seconds, "%.1f s"));
   for (int round = 1; round <= options.max_added + 1; ++round) {
     Say(options, "discover: round " + std::to_string(round) + ": scoring candidates against " +
                      (out.added.empty() ? std::string("the declared model")
@@ -172,11 +161,11 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
       for (CandidateScore& s : scores) {
         if (!s.passes) break;  // passing candidates come first, best first
         Say(options, "discover: confirming " + s.effect + " by a joint refit (" +
-                         Elapsed(Seconds(start)) + " so far)");
+                         NumberText(Seconds(start), "%.1f s") + " so far)");
         CandidatePass next;
         if (ConfirmCandidate(pass, estimation, o.fit, options.alpha, &s, &next)) {
           Say(options, "discover: added " + s.effect + " (Wald p = " +
-                           Number(s.wald_p_value) + ")");
+                           NumberText(s.wald_p_value, "%.3g") + ")");
           pass = std::move(next);
           out.added.push_back(s.effect);
           accepted = true;

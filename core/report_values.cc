@@ -1,4 +1,4 @@
-#include "experiments/report_values.h"
+#include "core/report_values.h"
 
 #include <cmath>
 #include <cstdio>
