@@ -18,6 +18,7 @@
 #include "experiments/log_summary.h"
 #include "experiments/scenario.h"
 #include "experiments/simulate_experiment.h"
+#include "experiments/study_command.h"
 
 namespace coaxid {
 namespace {
@@ -35,6 +36,9 @@ constexpr const char* kUsage =
     "  discover --logs=A.csv[,B.csv...] --config=F --out=DIR [--validate=C.csv,...]\n"
     "           [--alpha=0.01] [--max_added=4] [--segment_s=1]\n"
     "  import   --format=tmotor28 --in=DIR --out=DIR2\n"
+    "  study    --spec=FILE --out=DIR [--jobs=N] [--restart] [--max_runs=N]\n"
+    "           --spec=FILE --out=DIR --export=N | --job=DIR/jobs/job_K.yaml | --merge --out=DIR\n"
+    "           (mpirun -n K coaxid study ... in a -DCOAXID_MPI=ON build; docs/study.md)\n"
     "  demo     --out=DIR\n"
     "Run `coaxid --help` for every flag.\n";
 
@@ -301,6 +305,7 @@ int RunCli(int argc, char** argv) {
     if (command == "identify") return RunIdentify();
     if (command == "discover") return RunDiscover();
     if (command == "import") return RunImport();
+    if (command == "study") return RunStudy();
     std::cerr << "coaxid: unknown subcommand '" << command << "'\n" << kUsage;
     return 2;
   } catch (const InputError& e) {
