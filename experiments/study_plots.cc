@@ -195,13 +195,13 @@ Figure Detection(const StudySpec& spec, const nlohmann::json& summary) {
     const nlohmann::json& d = point["methods"]["discover"];
     const double x = PointX(point);
     for (const auto& [effect, rate] : d["detection"].items()) {
-      if (!rate.contains("rate")) continue;
+      if (!rate["rate"].is_number()) continue;
       detected.x.push_back(x);
       detected.y.push_back(rate["rate"].get<double>());
       const double lo = rate["interval"][0].get<double>(), hi = rate["interval"][1].get<double>();
       AddBar(&bars, x, 0.5 * (lo + hi), 0.5 * (hi - lo));
     }
-    if (d["false_alarm"].contains("rate")) {
+    if (d["false_alarm"]["rate"].is_number()) {
       false_alarm.x.push_back(x);
       false_alarm.y.push_back(d["false_alarm"]["rate"].get<double>());
     }

@@ -67,7 +67,9 @@ nlohmann::json ParameterStatistics(const std::vector<double>& estimate,
 
 // Rate with its Wilson 95 % interval.
 nlohmann::json Rate(int count, int n) {
-  if (n == 0) return {{"count", 0}, {"runs", 0}};
+  if (n == 0) {
+    return {{"count", 0}, {"runs", 0}, {"rate", nullptr}, {"interval", {nullptr, nullptr}}};
+  }
   const double z = kIntervalHalfWidthInStd, p = static_cast<double>(count) / n;
   const double centre = (p + z * z / (2 * n)) / (1 + z * z / n);
   const double half = z / (1 + z * z / n) * std::sqrt(p * (1 - p) / n + z * z / (4.0 * n * n));

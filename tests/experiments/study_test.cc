@@ -3,6 +3,8 @@
 // (threads, interrupted and resumed, exported jobs merged, MPI ranks), must
 // give the same records and the same summary; its coverage must be what 95 %
 // intervals give; bad specs write nothing.
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -31,7 +33,8 @@ const std::string kSource = COAXID_SOURCE_DIR;
 constexpr int kSeeds = 20;
 
 std::string TempDir(const std::string& name) {
-  const std::string dir = testing::TempDir() + "coaxid_study_test/" + name;
+  // One folder per test process: ctest runs the tests in parallel processes.
+  const std::string dir = testing::TempDir() + "coaxid_study_test_" + std::to_string(getpid()) + "/" + name;
   fs::remove_all(dir);
   fs::create_directories(fs::path(dir).parent_path());
   return dir;
