@@ -246,12 +246,13 @@ int RunWithMpi(const MpiWorld& world) {
     std::fprintf(stderr, "coaxid study (rank %d): %s\n", world.rank, e.what());
     status = 1;
   }
+  // Collectives before rank 0's merge, so that no rank waits on one that failed.
   status = MpiMax(world, status);
+  interrupted = MpiMax(world, interrupted ? 1 : 0) != 0;
   if (status == 0 && world.rank == 0) {
     MergeRecords(spec, FLAGS_out);
     WriteStudySummary(spec, FLAGS_out);
   }
-  interrupted = MpiMax(world, interrupted ? 1 : 0) != 0;
   return status != 0 ? status : interrupted ? 130 : 0;
 }
 
@@ -266,7 +267,13 @@ int RunStudy() {
   if (FLAGS_export > 0) return Export();
   const MpiWorld world = StartMpiIfLaunched();
   if (world.active) {
-    const int status = RunWithMpi(world);
+    int status = 0;
+    try {
+      status = RunWithMpi(world);
+    } catch (...) {
+      FinishMpi(world);
+      throw;
+    }
     FinishMpi(world);
     return status;
   }
