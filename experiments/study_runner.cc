@@ -64,6 +64,7 @@ StudyRunnerResult RunStudyRuns(const StudySpec& spec, const std::vector<int>& pe
   std::atomic<long> next{0};
   std::mutex mutex;  // guards done, error and the progress line
   int done = 0;
+  double last_line = -1;  // elapsed at the last progress line [s]
   std::exception_ptr error;
   auto worker = [&] {
     for (;;) {
@@ -83,6 +84,9 @@ StudyRunnerResult RunStudyRuns(const StudySpec& spec, const std::vector<int>& pe
         const double elapsed =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         const long left = limit - done;
+        // One line per run, at most one a second for fast runs; always the last.
+        if (elapsed - last_line < 1.0 && left > 0) continue;
+        last_line = elapsed;
         std::fprintf(stderr, "%s: %d/%d runs done (%d this session, %s), elapsed %s, about %s left\n",
                      options.label.c_str(), options.done_before + done, options.total, done,
                      RunKey(id.point, id.seed_index).c_str(), Duration(elapsed).c_str(),

@@ -1,6 +1,7 @@
 // Runs a study's pending runs on a pool of threads (each run single-threaded
 // inside), appending each record to runs.jsonl (or a part file) the moment it
-// finishes, with progress and the estimated time left on stderr.
+// finishes, with progress and the estimated time left on stderr (a line per
+// finished run, at most one a second).
 // SIGINT / SIGTERM stop the study cleanly: no new run starts, the runs in
 // flight finish and are written; a second signal ends the process at once
 // (the finished runs are on disk either way). Rerunning resumes.
