@@ -117,7 +117,7 @@ bool RunShard(const StudySpec& spec, const std::string& dir, const std::string& 
   const std::set<std::string> done = RecordKeys(ReadStudyRecords(spec, dir));
   const std::vector<int> pending = PendingRuns(spec, done, shard, shards);
   const int shard_total = static_cast<int>(PendingRuns(spec, {}, shard, shards).size());
-  std::fprintf(stderr, "%s: %s, %d runs (%d points x %d seeds)%s, %zu to do, %d thread(s)\n",
+  std::fprintf(stderr, "%s: %s, %d runs (%d point(s) x %d seeds)%s, %zu to do, %d thread(s)\n",
                label.c_str(), spec.name.c_str(), shard_total, spec.sweep.NumPoints(),
                spec.seed_count, shards > 1 ? " in this shard" : "", pending.size(), jobs);
   RecordAppender appender(records_path);
