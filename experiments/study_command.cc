@@ -21,8 +21,7 @@
 #include "experiments/study_summary.h"
 
 DEFINE_string(spec, "", "study: the study spec (YAML, docs/study.md)");
-DEFINE_int32(jobs, 0,
-             "study: worker threads (0: every core; under mpirun: 1 per rank)");
+DEFINE_int32(jobs, 0, "study: worker threads (0: every core; under mpirun: 1 per rank)");
 DEFINE_bool(restart, false, "study: discard the runs of another spec in --out and start over");
 DEFINE_int64(max_runs, -1, "study: stop after this many runs (resume later; < 0: all)");
 DEFINE_int32(export, 0,
@@ -143,10 +142,10 @@ int Merge() {
 
 std::string JobYaml(const StudySpec& spec, const std::string& dir, int shard, int shards) {
   YAML::Emitter y;
-  y << YAML::BeginMap << YAML::Key << "spec" << YAML::Value << Absolute(spec.source)
-    << YAML::Key << "spec_hash" << YAML::Value << spec.hash << YAML::Key << "out"
-    << YAML::Value << Absolute(dir) << YAML::Key << "shard" << YAML::Value << shard
-    << YAML::Key << "shards" << YAML::Value << shards << YAML::Key << "runs" << YAML::Value
+  y << YAML::BeginMap << YAML::Key << "spec" << YAML::Value << Absolute(spec.source) << YAML::Key
+    << "spec_hash" << YAML::Value << spec.hash << YAML::Key << "out" << YAML::Value << Absolute(dir)
+    << YAML::Key << "shard" << YAML::Value << shard << YAML::Key << "shards" << YAML::Value
+    << shards << YAML::Key << "runs" << YAML::Value
     << static_cast<int>(PendingRuns(spec, {}, shard, shards).size()) << YAML::EndMap;
   return std::string("# coaxid study job ") + std::to_string(shard) + " of " +
          std::to_string(shards) + ": runs i with i mod " + std::to_string(shards) + " = " +
@@ -170,16 +169,22 @@ int Export() {
     WriteFileAtomically(stem + ".yaml", JobYaml(spec, FLAGS_out, k, FLAGS_export));
     const std::string script =
         "#!/bin/sh\n"
-        "# coaxid study " + spec.name + ", job " + std::to_string(k) + " of " +
-        std::to_string(FLAGS_export) + ": appends to " + Absolute(FLAGS_out) + "/parts/job_" +
-        std::to_string(k) + ".jsonl; resubmitting resumes it.\n"
+        "# coaxid study " +
+        spec.name + ", job " + std::to_string(k) + " of " + std::to_string(FLAGS_export) +
+        ": appends to " + Absolute(FLAGS_out) + "/parts/job_" + std::to_string(k) +
+        ".jsonl; resubmitting resumes it.\n"
         "# Submit with sbatch, qsub, or run it; then `coaxid study --merge --out=" +
-        Absolute(FLAGS_out) + "`.\n"
-        "#SBATCH --job-name=coaxid-study-" + std::to_string(k) + "\n"
+        Absolute(FLAGS_out) +
+        "`.\n"
+        "#SBATCH --job-name=coaxid-study-" +
+        std::to_string(k) +
+        "\n"
         "#SBATCH --ntasks=1\n"
-        "#PBS -N coaxid-study-" + std::to_string(k) + "\n"
-        "exec \"" + binary + "\" study --job=\"" + Absolute(stem + ".yaml") +
-        "\" --jobs=${COAXID_JOBS:-0}\n";
+        "#PBS -N coaxid-study-" +
+        std::to_string(k) +
+        "\n"
+        "exec \"" +
+        binary + "\" study --job=\"" + Absolute(stem + ".yaml") + "\" --jobs=${COAXID_JOBS:-0}\n";
     WriteFileAtomically(stem + ".sh", script);
     fs::permissions(stem + ".sh", fs::perms::owner_exec | fs::perms::group_exec,
                     fs::perm_options::add, ec);
@@ -204,7 +209,8 @@ int Job() {
   }
   const StudySpec spec = LoadStudySpec(ReadString(node["spec"], where + ": spec"));
   if (spec.hash != ReadString(node["spec_hash"], where + ": spec_hash")) {
-    throw InputError(where + ": " + spec.source + " (or a file it names) changed since the "
+    throw InputError(where + ": " + spec.source +
+                     " (or a file it names) changed since the "
                      "export; export again");
   }
   ReadStudyHeader(out);
@@ -237,11 +243,10 @@ int RunWithMpi(const MpiWorld& world) {
   InstallStudyStopHandler();
   bool interrupted = false;
   try {
-    interrupted = RunShard(spec, FLAGS_out,
-                           FLAGS_out + "/parts/rank_" + std::to_string(world.rank) + ".jsonl",
-                           world.rank, world.size, Jobs(1),
-                           "study rank " + std::to_string(world.rank) + "/" +
-                               std::to_string(world.size));
+    interrupted = RunShard(
+        spec, FLAGS_out, FLAGS_out + "/parts/rank_" + std::to_string(world.rank) + ".jsonl",
+        world.rank, world.size, Jobs(1),
+        "study rank " + std::to_string(world.rank) + "/" + std::to_string(world.size));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "coaxid study (rank %d): %s\n", world.rank, e.what());
     status = 1;
@@ -281,7 +286,8 @@ int RunStudy() {
   const int jobs = Jobs(static_cast<int>(std::thread::hardware_concurrency()));
   PrepareStudyFolder(spec, FLAGS_out, FLAGS_restart);
   InstallStudyStopHandler();
-  const bool interrupted = RunShard(spec, FLAGS_out, FLAGS_out + "/runs.jsonl", 0, 1, jobs, "study");
+  const bool interrupted =
+      RunShard(spec, FLAGS_out, FLAGS_out + "/runs.jsonl", 0, 1, jobs, "study");
   WriteStudySummary(spec, FLAGS_out);
   return interrupted ? 130 : 0;
 }

@@ -97,10 +97,10 @@ Figure Estimates(const StudySpec& spec, const nlohmann::json& summary,
           }
         }
       } else {
-        const double spacing = spec.sweep.NumPoints() > 1
-                                   ? std::fabs(PointX(summary["points"][1]) -
-                                               PointX(summary["points"][0]))
-                                   : 1.0;
+        const double spacing =
+            spec.sweep.NumPoints() > 1
+                ? std::fabs(PointX(summary["points"][1]) - PointX(summary["points"][0]))
+                : 1.0;
         for (const auto& point : summary["points"]) {
           const nlohmann::json& m = point["methods"][method];
           if (!m["parameters"].contains(name)) continue;
@@ -165,7 +165,8 @@ Figure Coverage(const StudySpec& spec, const nlohmann::json& summary) {
         nominal.x.push_back(x);
         nominal.y.push_back(kNominalCoverage);
         PlotSeries& s = series[per_parameter ? "coverage" : names[i]];
-        if (s.title.empty()) s = {per_parameter ? "coverage" : names[i], {}, {}, "linespoints pt 7 ps 0.6"};
+        if (s.title.empty())
+          s = {per_parameter ? "coverage" : names[i], {}, {}, "linespoints pt 7 ps 0.6"};
         s.x.push_back(x);
         s.y.push_back(c["rate"].get<double>());
       }

@@ -38,8 +38,8 @@ void ReadRecordFile(const std::string& path, const StudySpec& spec,
       throw InputError(where + ": not a JSON run record (" + e.what() + ")");
     }
     start = end + 1;
-    if (!r.is_object() || !r.contains("key") || !r.contains("point") ||
-        !r.contains("seed_index") || !r.contains("spec_hash")) {
+    if (!r.is_object() || !r.contains("key") || !r.contains("point") || !r.contains("seed_index") ||
+        !r.contains("spec_hash")) {
       throw InputError(where + ": not a run record (needs key, point, seed_index, spec_hash)");
     }
     if (r["spec_hash"] != spec.hash) {

@@ -81,15 +81,15 @@ nlohmann::json OutputError(const StudySpec& spec, const Vehicle& start, const Ve
 
 nlohmann::json Ekf(const Vehicle& start, const Vehicle& truth, const RunLogs& logs) {
   EkfOptions o;
-  o.smoother = false;          // the parameters do not need the smoothed states
-  o.noise_adaptations = 1;     // as `coaxid identify --method=ekf`
+  o.smoother = false;       // the parameters do not need the smoothed states
+  o.noise_adaptations = 1;  // as `coaxid identify --method=ekf`
   const EkfResult r =
       RunEkf(start, logs.flight_estimation, NoiseFromData(logs.flight_estimation), o);
   if (!r.usable) return {{"ok", false}, {"error", r.failure}};
   nlohmann::json p = nlohmann::json::object();
   for (size_t k = 0; k < r.free_names.size(); ++k) {
-    p[r.free_names[k]] = Entry(r.estimate[k], r.estimate_std[k], r.identifiable[k],
-                               Truth(truth, r.free_names[k]));
+    p[r.free_names[k]] =
+        Entry(r.estimate[k], r.estimate_std[k], r.identifiable[k], Truth(truth, r.free_names[k]));
   }
   return {{"ok", true}, {"parameters", p}};
 }
@@ -143,10 +143,18 @@ nlohmann::json RunStudyRun(const StudySpec& spec, const StudyRunId& id) {
     nlohmann::json result;
     try {
       switch (m) {
-        case StudyMethod::kLinearKf: result = LinearKf(start, truth, logs); break;
-        case StudyMethod::kOutputError: result = OutputError(spec, start, truth, logs); break;
-        case StudyMethod::kEkf: result = Ekf(start, truth, logs); break;
-        case StudyMethod::kDiscover: result = DiscoverRun(spec, start, truth, logs); break;
+        case StudyMethod::kLinearKf:
+          result = LinearKf(start, truth, logs);
+          break;
+        case StudyMethod::kOutputError:
+          result = OutputError(spec, start, truth, logs);
+          break;
+        case StudyMethod::kEkf:
+          result = Ekf(start, truth, logs);
+          break;
+        case StudyMethod::kDiscover:
+          result = DiscoverRun(spec, start, truth, logs);
+          break;
       }
     } catch (const InputError& e) {
       result = {{"ok", false}, {"error", e.what()}};

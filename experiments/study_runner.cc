@@ -87,7 +87,8 @@ StudyRunnerResult RunStudyRuns(const StudySpec& spec, const std::vector<int>& pe
         // One line per run, at most one a second for fast runs; always the last.
         if (elapsed - last_line < 1.0 && left > 0) continue;
         last_line = elapsed;
-        std::fprintf(stderr, "%s: %d/%d runs done (%d this session, %s), elapsed %s, about %s left\n",
+        std::fprintf(stderr,
+                     "%s: %d/%d runs done (%d this session, %s), elapsed %s, about %s left\n",
                      options.label.c_str(), options.done_before + done, options.total, done,
                      RunKey(id.point, id.seed_index).c_str(), Duration(elapsed).c_str(),
                      Duration(elapsed / done * left).c_str());

@@ -21,16 +21,16 @@ std::vector<int> PendingRuns(const StudySpec& spec, const std::set<std::string>&
                              int shard = 0, int shards = 1);
 
 struct StudyRunnerOptions {
-  int jobs = 1;            // worker threads
-  long max_runs = -1;      // stop after this many runs (< 0: all pending)
+  int jobs = 1;                 // worker threads
+  long max_runs = -1;           // stop after this many runs (< 0: all pending)
   std::string label = "study";  // progress prefix
-  int done_before = 0;     // runs finished in earlier sessions (for the progress line)
-  int total = 0;           // runs of the whole study (or shard)
+  int done_before = 0;          // runs finished in earlier sessions (for the progress line)
+  int total = 0;                // runs of the whole study (or shard)
 };
 
 struct StudyRunnerResult {
-  int done = 0;             // runs finished and written in this session
-  bool interrupted = false; // a signal stopped it
+  int done = 0;              // runs finished and written in this session
+  bool interrupted = false;  // a signal stopped it
   double seconds = 0;
 };
 

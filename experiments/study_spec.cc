@@ -82,7 +82,7 @@ StudySweep ParseSweep(const YAML::Node& node, const std::string& where, const St
   } else {
     sweep.values = ReadDoubleList(values, w);
     for (double v : sweep.values) {
-      const bool ok = sweep.setting == SweepSetting::kEffectStrength   ? true
+      const bool ok = sweep.setting == SweepSetting::kEffectStrength ? true
                       : sweep.setting == SweepSetting::kInitialError ? (v >= 0 && v < 1)
                       : sweep.setting == SweepSetting::kNoiseScale   ? v >= 0
                                                                      : v > 0;
@@ -97,8 +97,8 @@ StudySweep ParseSweep(const YAML::Node& node, const std::string& where, const St
       }
     }
   }
-  const bool flight_only = sweep.setting == SweepSetting::kExcitationType ||
-                           sweep.setting == SweepSetting::kLogLength;
+  const bool flight_only =
+      sweep.setting == SweepSetting::kExcitationType || sweep.setting == SweepSetting::kLogLength;
   if (flight_only && !spec.HasFlight()) {
     throw InputError(where + ".setting: " + SweepSettingName(sweep.setting) +
                      " applies to flight scenarios and the study has none");
@@ -117,12 +117,14 @@ bool SameParameters(const ParameterSet& a, const ParameterSet& b) {
 void CheckMethodsFitLogs(const StudySpec& spec, const std::string& where) {
   for (StudyMethod m : spec.methods) {
     if (m == StudyMethod::kLinearKf && !spec.HasBalance()) {
-      throw InputError(where + ": linear_kf estimates from balance logs and the study has no "
-                               "balance scenario");
+      throw InputError(where +
+                       ": linear_kf estimates from balance logs and the study has no "
+                       "balance scenario");
     }
     if (m == StudyMethod::kEkf && !spec.HasFlight()) {
-      throw InputError(where + ": ekf estimates from flight logs and the study has no flight "
-                               "scenario");
+      throw InputError(where +
+                       ": ekf estimates from flight logs and the study has no flight "
+                       "scenario");
     }
   }
 }
@@ -131,32 +133,43 @@ void CheckMethodsFitLogs(const StudySpec& spec, const std::string& where) {
 
 const char* StudyMethodName(StudyMethod method) {
   switch (method) {
-    case StudyMethod::kLinearKf: return "linear_kf";
-    case StudyMethod::kOutputError: return "output_error";
-    case StudyMethod::kEkf: return "ekf";
-    case StudyMethod::kDiscover: return "discover";
+    case StudyMethod::kLinearKf:
+      return "linear_kf";
+    case StudyMethod::kOutputError:
+      return "output_error";
+    case StudyMethod::kEkf:
+      return "ekf";
+    case StudyMethod::kDiscover:
+      return "discover";
   }
   return "?";
 }
 
 const char* SweepSettingName(SweepSetting setting) {
   switch (setting) {
-    case SweepSetting::kNone: return "none";
-    case SweepSetting::kNoiseScale: return "noise_scale";
-    case SweepSetting::kExcitationScale: return "excitation_scale";
-    case SweepSetting::kExcitationType: return "excitation_type";
-    case SweepSetting::kLogLength: return "log_length_s";
-    case SweepSetting::kSampleRate: return "sample_rate_hz";
-    case SweepSetting::kInitialError: return "initial_error";
-    case SweepSetting::kEffectStrength: return "effect_strength";
+    case SweepSetting::kNone:
+      return "none";
+    case SweepSetting::kNoiseScale:
+      return "noise_scale";
+    case SweepSetting::kExcitationScale:
+      return "excitation_scale";
+    case SweepSetting::kExcitationType:
+      return "excitation_type";
+    case SweepSetting::kLogLength:
+      return "log_length_s";
+    case SweepSetting::kSampleRate:
+      return "sample_rate_hz";
+    case SweepSetting::kInitialError:
+      return "initial_error";
+    case SweepSetting::kEffectStrength:
+      return "effect_strength";
   }
   return "?";
 }
 
 int StudySweep::NumPoints() const {
   if (setting == SweepSetting::kNone) return 1;
-  return static_cast<int>(setting == SweepSetting::kExcitationType ? types.size()
-                                                                   : values.size());
+  return static_cast<int>(setting == SweepSetting::kExcitationType ? types.size() : values.size());
 }
 
 std::string StudySweep::Label(int point) const {
@@ -234,9 +247,8 @@ StudySpec ParseStudySpec(const std::string& yaml_text, const std::string& source
     throw InputError(source + ": scenarios: expected a non-empty list of scenario files");
   }
   for (size_t i = 0; i < scenarios.size(); ++i) {
-    const std::string path =
-        Resolve(ReadString(scenarios[i], source + ": scenarios[" + std::to_string(i) + "]"),
-                source);
+    const std::string path = Resolve(
+        ReadString(scenarios[i], source + ": scenarios[" + std::to_string(i) + "]"), source);
     const std::string text = ReadFile(path);
     spec.scenarios.push_back(ParseScenario(text, path));
     spec.scenario_paths.push_back(path);
@@ -251,8 +263,8 @@ StudySpec ParseStudySpec(const std::string& yaml_text, const std::string& source
     for (size_t i = 0; i < estimate.size(); ++i) {
       const std::string name = ReadString(estimate[i], source + ": estimate");
       if (!vehicle.parameters.Has(name) || !vehicle.parameters.Get(name).estimated) {
-        throw InputError(source + ": estimate: '" + name +
-                         "' is not a free parameter of " + spec.config_path);
+        throw InputError(source + ": estimate: '" + name + "' is not a free parameter of " +
+                         spec.config_path);
       }
       spec.estimate.push_back(name);
     }
@@ -260,12 +272,13 @@ StudySpec ParseStudySpec(const std::string& yaml_text, const std::string& source
 
   const YAML::Node methods = root["methods"];
   if (!methods || !methods.IsSequence() || methods.size() == 0) {
-    throw InputError(source + ": methods: expected a non-empty list (linear_kf, output_error, "
-                              "ekf, discover)");
+    throw InputError(source +
+                     ": methods: expected a non-empty list (linear_kf, output_error, "
+                     "ekf, discover)");
   }
   for (size_t i = 0; i < methods.size(); ++i) {
-    const StudyMethod m = ParseMethod(ReadString(methods[i], source + ": methods"),
-                                      source + ": methods");
+    const StudyMethod m =
+        ParseMethod(ReadString(methods[i], source + ": methods"), source + ": methods");
     for (StudyMethod seen : spec.methods) {
       if (seen == m) {
         throw InputError(source + ": methods: '" + StudyMethodName(m) + "' given twice");
@@ -320,12 +333,12 @@ StudySpec ParseStudySpec(const std::string& yaml_text, const std::string& source
       try {
         truths.push_back(MakeTruthVehicle(spec.config, s));
       } catch (const InputError& e) {
-        throw InputError(source + ": sweep point " + spec.sweep.Label(p) + ", scenario " +
-                         s.name + ": " + e.what());
+        throw InputError(source + ": sweep point " + spec.sweep.Label(p) + ", scenario " + s.name +
+                         ": " + e.what());
       }
       if (!SameParameters(truths.front().parameters, truths.back().parameters)) {
-        throw InputError(source + ": scenarios: " + spec.scenarios.front().name + " and " +
-                         s.name + " describe different truth vehicles (parameters or effects)");
+        throw InputError(source + ": scenarios: " + spec.scenarios.front().name + " and " + s.name +
+                         " describe different truth vehicles (parameters or effects)");
       }
     }
   }

@@ -32,9 +32,9 @@ const char* SweepSettingName(SweepSetting setting);
 
 struct StudySweep {
   SweepSetting setting = SweepSetting::kNone;
-  std::string parameter;            // kEffectStrength: "effect.param"
-  std::vector<double> values;       // numeric settings
-  std::vector<std::string> types;   // kExcitationType
+  std::string parameter;           // kEffectStrength: "effect.param"
+  std::vector<double> values;      // numeric settings
+  std::vector<std::string> types;  // kExcitationType
   int NumPoints() const;
   // The point's value as text ("0.5", "3211"; "-" for kNone).
   std::string Label(int point) const;
@@ -43,9 +43,9 @@ struct StudySweep {
 };
 
 struct StudySpec {
-  std::string source;        // the spec file
-  std::string name;          // file stem unless given
-  std::string config_path;   // resolved against the spec file's folder
+  std::string source;       // the spec file
+  std::string name;         // file stem unless given
+  std::string config_path;  // resolved against the spec file's folder
   VehicleConfig config;
   std::vector<std::string> scenario_paths;
   std::vector<Scenario> scenarios;

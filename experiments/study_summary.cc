@@ -17,8 +17,8 @@ namespace {
 nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
 double BinomialLogPmf(int n, int k, double p) {
-  return std::lgamma(n + 1.0) - std::lgamma(k + 1.0) - std::lgamma(n - k + 1.0) +
-         k * std::log(p) + (n - k) * std::log1p(-p);
+  return std::lgamma(n + 1.0) - std::lgamma(k + 1.0) - std::lgamma(n - k + 1.0) + k * std::log(p) +
+         (n - k) * std::log1p(-p);
 }
 
 // Effects of the point's truth that the config does not declare.
@@ -79,7 +79,8 @@ nlohmann::json Rate(int count, int n) {
           {"interval", {std::max(0.0, centre - half), std::min(1.0, centre + half)}}};
 }
 
-nlohmann::json MethodSummary(const std::string& method, const std::vector<const nlohmann::json*>& runs,
+nlohmann::json MethodSummary(const std::string& method,
+                             const std::vector<const nlohmann::json*>& runs,
                              const std::vector<std::string>& undeclared) {
   int ok = 0, failed = 0;
   std::string first_error;
@@ -179,17 +180,18 @@ nlohmann::json SummarizeStudy(const StudySpec& spec, const std::vector<nlohmann:
   }
   nlohmann::json methods = nlohmann::json::array();
   for (StudyMethod m : spec.methods) methods.push_back(StudyMethodName(m));
-  nlohmann::json summary = {{"study", spec.name},
-                            {"spec", std::filesystem::absolute(spec.source).lexically_normal().string()},
-                            {"spec_hash", spec.hash},
-                            {"setting", SweepSettingName(spec.sweep.setting)},
-                            {"methods", methods},
-                            {"seeds", spec.seed_count},
-                            {"base_seed", spec.base_seed},
-                            {"runs_total", spec.NumRuns()},
-                            {"runs_done", records.size()},
-                            {"nominal_coverage", kNominalCoverage},
-                            {"points", points}};
+  nlohmann::json summary = {
+      {"study", spec.name},
+      {"spec", std::filesystem::absolute(spec.source).lexically_normal().string()},
+      {"spec_hash", spec.hash},
+      {"setting", SweepSettingName(spec.sweep.setting)},
+      {"methods", methods},
+      {"seeds", spec.seed_count},
+      {"base_seed", spec.base_seed},
+      {"runs_total", spec.NumRuns()},
+      {"runs_done", records.size()},
+      {"nominal_coverage", kNominalCoverage},
+      {"points", points}};
   if (!spec.sweep.parameter.empty()) summary["parameter"] = spec.sweep.parameter;
   return summary;
 }
@@ -211,16 +213,16 @@ std::string StudySummaryMarkdown(const nlohmann::json& s) {
     md += "\n## Point " + point["label"].get<std::string>() + " (" +
           std::to_string(point["runs"].get<int>()) + " runs";
     if (point["simulation_failures"].get<int>() > 0) {
-      md += ", " + std::to_string(point["simulation_failures"].get<int>()) +
-            " simulations failed";
+      md += ", " + std::to_string(point["simulation_failures"].get<int>()) + " simulations failed";
     }
     md += ")\n";
     for (const auto& [method, m] : point["methods"].items()) {
       md += "\n### " + method + ": " + std::to_string(m["runs_ok"].get<int>()) + " ok, " +
             std::to_string(m["runs_failed"].get<int>()) + " failed";
       if (m.contains("first_error")) md += " (first: " + m["first_error"].get<std::string>() + ")";
-      md += "\n\n| parameter | truth | bias | bias / truth | spread | mean std | spread / std "
-            "| coverage | 95 % band |\n|---|---|---|---|---|---|---|---|---|\n";
+      md +=
+          "\n\n| parameter | truth | bias | bias / truth | spread | mean std | spread / std "
+          "| coverage | 95 % band |\n|---|---|---|---|---|---|---|---|---|\n";
       for (const auto& [name, p] : m["parameters"].items()) {
         const nlohmann::json& c = p["coverage"];
         std::string coverage = "-", band = "-";
@@ -230,17 +232,17 @@ std::string StudySummaryMarkdown(const nlohmann::json& s) {
                      Format(c["rate"], "%.3f") + (c["in_band"].get<bool>() ? "" : " **outside**");
           band = Format(c["band"][0], "%.3f") + " - " + Format(c["band"][1], "%.3f");
         }
-        md += "| " + name + " | " + Format(p["truth"]) + " | " + Format(p["bias"], "%.3g") +
-              " | " + Format(p["relative_bias"], "%.2g") + " | " + Format(p["spread"], "%.3g") +
-              " | " + Format(p["mean_std"], "%.3g") + " | " + Format(p["spread_over_std"], "%.2f") +
-              " | " + coverage + " | " + band + " |\n";
+        md += "| " + name + " | " + Format(p["truth"]) + " | " + Format(p["bias"], "%.3g") + " | " +
+              Format(p["relative_bias"], "%.2g") + " | " + Format(p["spread"], "%.3g") + " | " +
+              Format(p["mean_std"], "%.3g") + " | " + Format(p["spread_over_std"], "%.2f") + " | " +
+              coverage + " | " + band + " |\n";
       }
       if (m.contains("false_alarm")) {
         md += "\n";
         for (const auto& [effect, d] : m["detection"].items()) {
-          md += "- detection of " + effect + " (in the truth, not declared): " +
-                Format(d["rate"], "%.3f") + " (95 % interval " + Format(d["interval"][0], "%.2f") +
-                " - " + Format(d["interval"][1], "%.2f") + ")\n";
+          md += "- detection of " + effect +
+                " (in the truth, not declared): " + Format(d["rate"], "%.3f") + " (95 % interval " +
+                Format(d["interval"][0], "%.2f") + " - " + Format(d["interval"][1], "%.2f") + ")\n";
         }
         const nlohmann::json& f = m["false_alarm"];
         md += "- false alarms (an effect added that the truth does not have): " +

@@ -34,7 +34,8 @@ constexpr int kSeeds = 20;
 
 std::string TempDir(const std::string& name) {
   // One folder per test process: ctest runs the tests in parallel processes.
-  const std::string dir = testing::TempDir() + "coaxid_study_test_" + std::to_string(getpid()) + "/" + name;
+  const std::string dir =
+      testing::TempDir() + "coaxid_study_test_" + std::to_string(getpid()) + "/" + name;
   fs::remove_all(dir);
   fs::create_directories(fs::path(dir).parent_path());
   return dir;
@@ -44,11 +45,17 @@ std::string TempDir(const std::string& name) {
 // experiment, plain Monte Carlo.
 std::string SpecText(int seeds = kSeeds) {
   return "study: small\n"
-         "config: " + kSource + "/configs/glmav.yaml\n"
-         "scenarios: [" + kSource + "/configs/scenarios/balance_short.yaml]\n"
+         "config: " +
+         kSource +
+         "/configs/glmav.yaml\n"
+         "scenarios: [" +
+         kSource +
+         "/configs/scenarios/balance_short.yaml]\n"
          "estimate: [alpha, beta, sigma0, Cz, gamma1, gamma2, d]\n"
          "methods: [linear_kf, output_error]\n"
-         "seeds: {count: " + std::to_string(seeds) + ", base: 500}\n"
+         "seeds: {count: " +
+         std::to_string(seeds) +
+         ", base: 500}\n"
          "output_error: {noise_relaxations: 1}\n";
 }
 
@@ -73,8 +80,8 @@ class StudyTest : public testing::Test {
   static void SetUpTestSuite() {
     spec_path_ = new std::string(WriteSpec("small", SpecText()));
     reference_ = new std::string(TempDir("reference"));
-    const RunResult r = RunCoaxid("study --spec=" + *spec_path_ + " --out=" + *reference_ +
-                                  " --jobs=2");
+    const RunResult r =
+        RunCoaxid("study --spec=" + *spec_path_ + " --out=" + *reference_ + " --jobs=2");
     ASSERT_EQ(r.status, 0) << r.output;
     reference_status_ok_ = true;
   }
@@ -245,13 +252,13 @@ TEST(StudySpec, BadSpecExitsTwoAndWritesNothing) {
 // Each setting changes what it says and nothing else; seeds differ between
 // the scenarios of one run.
 TEST(StudySpec, SweepPointsChangeTheirSetting) {
-  const std::string spec_path = WriteSpec(
-      "sweep", "config: " + kSource + "/configs/glmav.yaml\nscenarios: [" + kSource +
-                   "/configs/scenarios/balance_short.yaml, " + kSource +
-                   "/configs/scenarios/balance_short.yaml]\nmethods: [output_error]\n"
-                   "seeds: {count: 2, base: 7}\n"
-                   "sweep: {setting: effect_strength, parameter: wake_interference.k_T, "
-                   "values: [0, 3.0e-6]}\n");
+  const std::string spec_path =
+      WriteSpec("sweep", "config: " + kSource + "/configs/glmav.yaml\nscenarios: [" + kSource +
+                             "/configs/scenarios/balance_short.yaml, " + kSource +
+                             "/configs/scenarios/balance_short.yaml]\nmethods: [output_error]\n"
+                             "seeds: {count: 2, base: 7}\n"
+                             "sweep: {setting: effect_strength, parameter: wake_interference.k_T, "
+                             "values: [0, 3.0e-6]}\n");
   const StudySpec spec = LoadStudySpec(spec_path);
   ASSERT_EQ(spec.NumRuns(), 4);
   const std::vector<Scenario> absent = PointScenarios(spec, 0, 7);
