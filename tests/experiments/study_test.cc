@@ -34,10 +34,21 @@ namespace fs = std::filesystem;
 const std::string kSource = COAXID_SOURCE_DIR;
 constexpr int kSeeds = 20;
 
+// One folder per test process (ctest runs the tests in parallel processes),
+// removed when the process's tests are done.
+std::string TestRoot() {
+  return testing::TempDir() + "coaxid_study_test_" + std::to_string(getpid());
+}
+
+class RemoveTestRoot : public testing::Environment {
+ public:
+  void TearDown() override { fs::remove_all(TestRoot()); }
+};
+testing::Environment* const kRemoveTestRoot =
+    testing::AddGlobalTestEnvironment(new RemoveTestRoot);
+
 std::string TempDir(const std::string& name) {
-  // One folder per test process: ctest runs the tests in parallel processes.
-  const std::string dir =
-      testing::TempDir() + "coaxid_study_test_" + std::to_string(getpid()) + "/" + name;
+  const std::string dir = TestRoot() + "/" + name;
   fs::remove_all(dir);
   fs::create_directories(fs::path(dir).parent_path());
   return dir;
