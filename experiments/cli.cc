@@ -20,6 +20,7 @@
 #include "experiments/log_summary.h"
 #include "experiments/scenario.h"
 #include "experiments/simulate_experiment.h"
+#include "experiments/study_command.h"
 
 namespace coaxid {
 namespace {
@@ -40,6 +41,9 @@ constexpr const char* kUsage =
     "           [--holdout_fraction=0.2] [--truth=T.json]\n"
     "           linear_kf (balance logs), output_error (all), ekf (flight logs); one table\n"
     "  import   --format=tmotor28 --in=DIR --out=DIR2\n"
+    "  study    --spec=FILE --out=DIR [--jobs=N] [--restart] [--max_runs=N]\n"
+    "           --spec=FILE --out=DIR --export=N | --job=DIR/jobs/job_K.yaml | --merge --out=DIR\n"
+    "           (mpirun -n K coaxid study ... in a -DCOAXID_MPI=ON build; docs/study.md)\n"
     "  demo     --out=DIR   (the whole story on the shipped data -> DIR/report.html)\n"
     "Run `coaxid --help` for every flag.\n";
 
@@ -120,6 +124,7 @@ int RunCli(int argc, char** argv) {
     if (command == "identify") return RunIdentify();
     if (command == "discover") return RunDiscover();
     if (command == "import") return RunImport();
+    if (command == "study") return RunStudy();
     std::cerr << "coaxid: unknown subcommand '" << command << "'\n" << kUsage;
     return 2;
   } catch (const InputError& e) {

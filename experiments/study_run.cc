@@ -1,0 +1,170 @@
+#include "experiments/study_run.h"
+
+#include <cmath>
+
+#include "core/errors.h"
+#include "core/log.h"
+#include "dynamics/vehicle.h"
+#include "experiments/simulate_experiment.h"
+#include "experiments/study_points.h"
+#include "ident/balance_holds.h"
+#include "ident/discovery.h"
+#include "ident/ekf.h"
+#include "ident/estimation_log.h"
+#include "ident/linear_baseline.h"
+#include "ident/noise_weights.h"
+#include "ident/output_error.h"
+
+namespace coaxid {
+namespace {
+
+nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+nlohmann::json Truth(const Vehicle& truth, const std::string& name) {
+  return truth.parameters.Has(name) ? Number(truth.parameters.Value(name)) : nlohmann::json();
+}
+
+nlohmann::json Entry(double estimate, double std, bool identifiable, const nlohmann::json& truth) {
+  return {{"estimate", Number(estimate)},
+          {"std", identifiable ? Number(std) : nlohmann::json()},
+          {"truth", truth}};
+}
+
+struct RunLogs {
+  std::vector<Log> balance, flight;
+  std::vector<EstimationLog> all, flight_estimation;
+};
+
+OutputErrorOptions FitOptions(const StudySpec& spec) {
+  OutputErrorOptions o;
+  o.segment_schedule_s = {std::min(0.25, spec.segment_s), spec.segment_s};
+  if (spec.segment_s <= 0.25) o.segment_schedule_s = {spec.segment_s};
+  o.noise_relaxations = spec.noise_relaxations;
+  o.num_threads = 1;  // the study runs in parallel; one run, one thread
+  return o;
+}
+
+nlohmann::json LinearKf(const Vehicle& start, const Vehicle& truth, const RunLogs& logs) {
+  std::vector<BalanceData> data;
+  for (const Log& log : logs.balance) data.push_back(MakeBalanceData(log));
+  const LinearBaselineResult r = RunLinearBaseline(start.parameters, data, {}, {});
+  nlohmann::json p = nlohmann::json::object();
+  auto add = [&](const char* name, const BaselineEstimate& e) {
+    p[name] = Entry(e.value, e.std, std::isfinite(e.std), Truth(truth, name));
+  };
+  add("alpha", r.Parameter(kPsiAlpha));
+  add("beta", r.Parameter(kThetaBeta));
+  add("gamma1", r.Parameter(kThetaGamma1));
+  add("gamma2", r.Parameter(kThetaGamma2));
+  add("Cz", r.Cz_from_beta);
+  add("sigma0", {r.thrust_map.sigma0, r.thrust_map.sigma0_std});
+  return {{"ok", true}, {"parameters", p}};
+}
+
+nlohmann::json IdentifiabilityParameters(const ParameterSet& estimates,
+                                         const IdentifiabilityReport& id, const Vehicle& truth) {
+  nlohmann::json p = nlohmann::json::object();
+  for (size_t k = 0; k < id.names.size(); ++k) {
+    p[id.names[k]] = Entry(estimates.Value(id.names[k]), id.std[k], id.identifiable[k],
+                           Truth(truth, id.names[k]));
+  }
+  return p;
+}
+
+nlohmann::json OutputError(const StudySpec& spec, const Vehicle& start, const Vehicle& truth,
+                           const RunLogs& logs) {
+  const OutputErrorResult r = FitOutputError(start, logs.all, FitOptions(spec));
+  if (!r.usable) return {{"ok", false}, {"error", r.why_not_usable}};
+  return {{"ok", true},
+          {"parameters", IdentifiabilityParameters(r.parameters, r.identifiability, truth)}};
+}
+
+nlohmann::json Ekf(const Vehicle& start, const Vehicle& truth, const RunLogs& logs) {
+  EkfOptions o;
+  o.smoother = false;       // the parameters do not need the smoothed states
+  o.noise_adaptations = 1;  // as `coaxid identify --method=ekf`
+  const EkfResult r =
+      RunEkf(start, logs.flight_estimation, NoiseFromData(logs.flight_estimation), o);
+  if (!r.usable) return {{"ok", false}, {"error", r.failure}};
+  nlohmann::json p = nlohmann::json::object();
+  for (size_t k = 0; k < r.free_names.size(); ++k) {
+    p[r.free_names[k]] =
+        Entry(r.estimate[k], r.estimate_std[k], r.identifiable[k], Truth(truth, r.free_names[k]));
+  }
+  return {{"ok", true}, {"parameters", p}};
+}
+
+nlohmann::json DiscoverRun(const StudySpec& spec, const Vehicle& start, const Vehicle& truth,
+                           const RunLogs& logs) {
+  DiscoveryOptions o;
+  o.alpha = spec.discover_alpha;
+  o.max_added = spec.discover_max_added;
+  o.window_s = spec.segment_s;
+  o.fit = FitOptions(spec);
+  const DiscoveryResult r = Discover(start, logs.all, {}, o);
+  nlohmann::json unexplained = nlohmann::json::array();
+  for (const UnexplainedChannel& u : r.unexplained) unexplained.push_back(u.channel);
+  return {{"ok", true},
+          {"added", r.added},
+          {"unexplained", unexplained},
+          {"parameters", IdentifiabilityParameters(r.final.result.parameters,
+                                                   r.final.result.identifiability, truth)}};
+}
+
+}  // namespace
+
+nlohmann::json RunStudyRun(const StudySpec& spec, const StudyRunId& id) {
+  nlohmann::json record = {{"key", RunKey(id.point, id.seed_index)},
+                           {"point", id.point},
+                           {"point_label", spec.sweep.Label(id.point)},
+                           {"seed_index", id.seed_index},
+                           {"seed", id.seed},
+                           {"spec_hash", spec.hash}};
+  const std::vector<Scenario> scenarios = PointScenarios(spec, id.point, id.seed);
+  const Vehicle truth = MakeTruthVehicle(spec.config, scenarios.front());
+  RunLogs logs;
+  try {
+    for (const Scenario& s : scenarios) {
+      Log log = SimulateScenario(MakeTruthVehicle(spec.config, s), s);
+      log.source = s.name + " seed " + std::to_string(s.seed);
+      logs.all.push_back(MakeEstimationLog(log));
+      if (log.kind == LogKind::kFlight) logs.flight_estimation.push_back(logs.all.back());
+      (log.kind == LogKind::kBalance ? logs.balance : logs.flight).push_back(std::move(log));
+    }
+  } catch (const ComputationError& e) {
+    record["simulation"] = e.what();
+    record["methods"] = nlohmann::json::object();
+    return record;
+  }
+  record["simulation"] = "ok";
+  const Vehicle start = StartVehicle(spec, id.point, id.seed);
+  nlohmann::json methods = nlohmann::json::object();
+  for (StudyMethod m : spec.methods) {
+    nlohmann::json result;
+    try {
+      switch (m) {
+        case StudyMethod::kLinearKf:
+          result = LinearKf(start, truth, logs);
+          break;
+        case StudyMethod::kOutputError:
+          result = OutputError(spec, start, truth, logs);
+          break;
+        case StudyMethod::kEkf:
+          result = Ekf(start, truth, logs);
+          break;
+        case StudyMethod::kDiscover:
+          result = DiscoverRun(spec, start, truth, logs);
+          break;
+      }
+    } catch (const InputError& e) {
+      result = {{"ok", false}, {"error", e.what()}};
+    } catch (const ComputationError& e) {
+      result = {{"ok", false}, {"error", e.what()}};
+    }
+    methods[StudyMethodName(m)] = result;
+  }
+  record["methods"] = methods;
+  return record;
+}
+
+}  // namespace coaxid

@@ -1,0 +1,26 @@
+// One run of a study (experiments/study_spec.h): simulate the point's
+// scenarios with the run's seed, run every method of the spec on the logs,
+// and record per parameter the estimate, the reported std and the truth.
+// A pure function of (spec, point, seed): each method runs single-threaded
+// and nothing depends on the time, the thread or what ran before, so the
+// record is the same on any worker, process or machine.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "experiments/study_spec.h"
+
+namespace coaxid {
+
+// The run's record, one line of runs.jsonl:
+//   {"key": "p0_s3", "point": 0, "point_label": "0.5", "seed_index": 3, "seed": 1003,
+//    "simulation": "ok" | the error,
+//    "methods": {"output_error": {"ok": true, "parameters": {"alpha":
+//                {"estimate": .., "std": .. | null (not identifiable), "truth": .. | null}}},
+//                "discover": {"ok": true, "added": [...], "parameters": {...}},
+//                "linear_kf": {"ok": false, "error": "..."}}}
+// A method that fails (ComputationError, or data it cannot use) is recorded
+// as failed with its message: a failure rate is a study result too.
+nlohmann::json RunStudyRun(const StudySpec& spec, const StudyRunId& id);
+
+}  // namespace coaxid

@@ -1,0 +1,90 @@
+// Study spec files (docs/study.md, configs/studies/*.yaml): a Monte Carlo or
+// sensitivity study of the estimators on simulated logs. A study is a list of
+// runs, one per (sweep point, seed); each run is a pure function of the spec,
+// the point and the seed (experiments/study_run.h), so runs can be done in any
+// order, on any number of threads, processes or machines.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/vehicle_config.h"
+#include "experiments/scenario.h"
+
+namespace coaxid {
+
+enum class StudyMethod { kLinearKf, kOutputError, kEkf, kDiscover };
+const char* StudyMethodName(StudyMethod method);
+
+// What the sweep varies (one setting per study).
+enum class SweepSetting {
+  kNone,             // plain Monte Carlo: one point
+  kNoiseScale,       // factor on every noise std of every scenario
+  kExcitationScale,  // factor on the flight excitation amplitudes and the balance swashplate grid
+  kExcitationType,   // flight excitation: multisine, 3211, none
+  kLogLength,        // flight duration [s]
+  kSampleRate,       // flight and balance sampling rate [Hz]
+  kInitialError,     // relative perturbation of the start values (uniform in +-value, per seed)
+  kEffectStrength,   // a truth effect parameter ("effect.param"); 0: the effect is absent
+};
+const char* SweepSettingName(SweepSetting setting);
+
+struct StudySweep {
+  SweepSetting setting = SweepSetting::kNone;
+  std::string parameter;           // kEffectStrength: "effect.param"
+  std::vector<double> values;      // numeric settings
+  std::vector<std::string> types;  // kExcitationType
+  int NumPoints() const;
+  // The point's value as text ("0.5", "3211"; "-" for kNone).
+  std::string Label(int point) const;
+  // The point's numeric value (NaN for kNone and kExcitationType).
+  double Value(int point) const;
+};
+
+struct StudySpec {
+  std::string source;       // the spec file
+  std::string name;         // file stem unless given
+  std::string config_path;  // resolved against the spec file's folder
+  VehicleConfig config;
+  std::vector<std::string> scenario_paths;
+  std::vector<Scenario> scenarios;
+  std::vector<std::string> estimate;  // empty: the config's free parameters
+  std::vector<StudyMethod> methods;
+  int seed_count = 0;
+  uint64_t base_seed = 1;
+  StudySweep sweep;
+  // output_error (and discover's fits).
+  double segment_s = 1.0;
+  int noise_relaxations = 2;
+  // discover.
+  double discover_alpha = 0.01;
+  int discover_max_added = 4;
+  // FNV-1a of the spec text and of every file it names (config, scenarios):
+  // a finished run belongs to this study only if the hashes agree.
+  std::string hash;
+
+  int NumRuns() const { return sweep.NumPoints() * seed_count; }
+  bool HasFlight() const;
+  bool HasBalance() const;
+};
+
+// One run of the study: run index = point * seed_count + seed_index.
+struct StudyRunId {
+  int point = 0, seed_index = 0;
+  uint64_t seed = 0;  // base_seed + seed_index
+};
+StudyRunId RunIdAt(const StudySpec& spec, int run_index);
+std::string RunKey(int point, int seed_index);  // "p3_s12"
+
+// Reads and checks a spec strictly: unknown keys, missing entries, bad values,
+// methods that cannot use the scenarios' logs and sweeps that do not apply
+// throw InputError naming the file and key. Builds every point's scenarios
+// and truth once, so a spec that parses runs.
+StudySpec LoadStudySpec(const std::string& path);
+StudySpec ParseStudySpec(const std::string& yaml_text, const std::string& source);
+
+// 64-bit FNV-1a as 16 hex digits.
+std::string Fnv1aHex(const std::string& text, uint64_t hash = 14695981039346656037ull);
+
+}  // namespace coaxid
