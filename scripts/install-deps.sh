@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs coaxid's build dependencies from Debian 12 packages when missing.
 # Idempotent: does nothing (and needs no network) when everything is there.
+#   scripts/install-deps.sh         what the default build needs
+#   scripts/install-deps.sh --mpi   also OpenMPI, for the -DCOAXID_MPI=ON build
 set -euo pipefail
 
 packages=(
@@ -10,6 +12,7 @@ packages=(
   libyaml-cpp-dev nlohmann-json3-dev libbenchmark-dev
   gnuplot-nox
 )
+if [ "${1:-}" = "--mpi" ]; then packages+=(libopenmpi-dev openmpi-bin); fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -2,6 +2,8 @@
 # Installs dependencies, builds and runs every test.
 #   scripts/test.sh              Release build in build/
 #   scripts/test.sh --sanitize   AddressSanitizer + UndefinedBehaviorSanitizer build in build-asan/
+#   scripts/test.sh --mpi        -DCOAXID_MPI=ON build in build-mpi/: the study tests, with
+#                                `mpirun -n 3` against one process
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 if [ "${1:-}" = "--sanitize" ]; then
@@ -10,6 +12,13 @@ if [ "${1:-}" = "--sanitize" ]; then
   export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   cd "$here/build-asan"
+elif [ "${1:-}" = "--mpi" ]; then
+  bash "$here/scripts/install-deps.sh" --mpi
+  bash "$here/scripts/build.sh" "$here/build-mpi" -DCOAXID_MPI=ON -DCOAXID_BUILD_BENCH=OFF
+  cd "$here/build-mpi"
+  ctest -N -R 'Mpi' | grep -q 'Total Tests: [1-9]' || { echo "test.sh: the MPI test is not registered"; exit 1; }
+  ctest --output-on-failure -j"$(nproc)" -R '^Study'
+  exit 0
 else
   bash "$here/scripts/build.sh" "$here/build"
   cd "$here/build"
