@@ -129,7 +129,9 @@ Figure Estimates(const StudySpec& spec, const nlohmann::json& summary,
 }
 
 Figure Coverage(const StudySpec& spec, const nlohmann::json& summary) {
-  const bool per_parameter = spec.sweep.setting == SweepSetting::kNone;
+  // One point (no sweep, or a sweep of one value): coverage per parameter.
+  const bool per_parameter =
+      spec.sweep.setting == SweepSetting::kNone || summary["points"].size() == 1;
   const std::vector<std::string> names = ParameterNames(summary);
   Figure f;
   f.title = "Coverage of the 95 % intervals (nominal: dashed; binomial 95 % band: grey)";
