@@ -94,34 +94,6 @@ Figure Spectra(const DiscoveryResult& r) {
   return f;
 }
 
-Figure MeasuredVersusModels(const std::string& title, const EstimationLog& log,
-                            const Eigen::MatrixXd& before, const Eigen::MatrixXd& after) {
-  Figure f;
-  f.title = title;
-  f.columns = 3;
-  const bool balance = log.kind == LogKind::kBalance;
-  for (int c = 0; c < log.NumChannels(); ++c) {
-    PlotPanel panel;
-    panel.title = log.channel_names[c];
-    panel.x_label = balance ? "row" : "t [s]";
-    PlotSeries m{"measured", {}, {}, balance ? "points pt 7 ps 0.3 lc rgb '#999999'" : "lines lc rgb '#999999'"};
-    PlotSeries b{"declared model", {}, {}, "lines lc rgb 'blue'"};
-    PlotSeries a{"final model", {}, {}, "lines lc rgb 'red'"};
-    for (int k = 0; k < log.NumRows(); ++k) {
-      const double x = balance ? k : log.inputs.time(k);
-      m.x.push_back(x);
-      m.y.push_back(log.values(k, c));
-      b.x.push_back(x);
-      b.y.push_back(before(k, c));
-      a.x.push_back(x);
-      a.y.push_back(after(k, c));
-    }
-    panel.series = {m, b, a};
-    f.panels.push_back(panel);
-  }
-  return f;
-}
-
 std::string FitTable(const DiscoveryResult& r, bool has_validation) {
   std::ostringstream o;
   o << "| channel | rms before | rms after | nrmse before | nrmse after |";
@@ -295,14 +267,17 @@ int RunDiscover() {
   render(Autocorrelations(r), "residual_autocorrelation");
   render(Spectra(r), "residual_spectrum");
   for (size_t i = 0; i < split.estimation.size(); ++i) {
-    render(MeasuredVersusModels("estimation: " + split.estimation[i].source, split.estimation[i],
-                                r.baseline.result.predictions[i], r.final.result.predictions[i]),
+    render(MeasuredVersusModelsFigure("estimation: " + split.estimation[i].source,
+                                      split.estimation[i],
+                                      {{"declared model", &r.baseline.result.predictions[i], "blue"},
+                                       {"final model", &r.final.result.predictions[i], "red"}}),
            "fit_" + std::to_string(i + 1) + "_" + split.estimation[i].name);
   }
   for (size_t i = 0; i < split.validation.size(); ++i) {
-    render(MeasuredVersusModels("held out: " + split.validation[i].source, split.validation[i],
-                                r.baseline.validation_predictions[i],
-                                r.final.validation_predictions[i]),
+    render(MeasuredVersusModelsFigure("held out: " + split.validation[i].source,
+                                      split.validation[i],
+                                      {{"declared model", &r.baseline.validation_predictions[i], "blue"},
+                                       {"final model", &r.final.validation_predictions[i], "red"}}),
            "validation_" + std::to_string(i + 1) + "_" + split.validation[i].name);
   }
   nlohmann::json j = DiscoveryJson(r, options);

@@ -54,8 +54,8 @@ std::string MeasuredVersusModelCsv(const EstimationLog& log, const Eigen::Matrix
   return out.str();
 }
 
-Figure MeasuredVersusModelFigure(const std::string& title, const EstimationLog& log,
-                                 const Eigen::MatrixXd& model) {
+Figure MeasuredVersusModelsFigure(const std::string& title, const EstimationLog& log,
+                                  const std::vector<ModelCurve>& models) {
   Figure f;
   f.title = title;
   f.columns = 3;
@@ -65,20 +65,27 @@ Figure MeasuredVersusModelFigure(const std::string& title, const EstimationLog& 
     panel.title = log.channel_names[c];
     panel.x_label = balance ? "row" : "t [s]";
     PlotSeries measured{"measured", {}, {},
-                        balance ? "points pt 7 ps 0.3" : "lines lc rgb '#999999'"};
-    PlotSeries predicted{"model", {}, {},
-                         balance ? "points pt 6 ps 0.4 lc rgb 'red'" : "lines lc rgb 'red'"};
+                        balance ? "points pt 7 ps 0.3 lc rgb '#999999'" : "lines lc rgb '#999999'"};
     for (int k = 0; k < log.NumRows(); ++k) {
-      const double x = balance ? k : log.inputs.time(k);
-      measured.x.push_back(x);
+      measured.x.push_back(balance ? k : log.inputs.time(k));
       measured.y.push_back(log.values(k, c));
-      predicted.x.push_back(x);
-      predicted.y.push_back(model(k, c));
     }
-    panel.series = {measured, predicted};
+    panel.series = {measured};
+    for (const ModelCurve& model : models) {
+      const std::string colour = " lc rgb '" + model.colour + "'";
+      PlotSeries s{model.name, measured.x, {},
+                   (balance ? "points pt 6 ps 0.4" : "lines") + colour};
+      for (int k = 0; k < log.NumRows(); ++k) s.y.push_back((*model.values)(k, c));
+      panel.series.push_back(s);
+    }
     f.panels.push_back(panel);
   }
   return f;
+}
+
+Figure MeasuredVersusModelFigure(const std::string& title, const EstimationLog& log,
+                                 const Eigen::MatrixXd& model) {
+  return MeasuredVersusModelsFigure(title, log, {{"model", &model, "red"}});
 }
 
 }  // namespace coaxid

@@ -28,6 +28,15 @@ LogSplit SplitEstimationAndValidation(const std::vector<Log>& logs,
 
 // CSV: t, then for each channel its measured value and the model's.
 std::string MeasuredVersusModelCsv(const EstimationLog& log, const Eigen::MatrixXd& model);
+// A model's outputs on a log (same shape as its values) and how to draw them.
+struct ModelCurve {
+  std::string name;              // legend entry
+  const Eigen::MatrixXd* values;
+  std::string colour;            // gnuplot colour, e.g. "red"
+};
+// One panel per channel: measured (grey) and each model.
+Figure MeasuredVersusModelsFigure(const std::string& title, const EstimationLog& log,
+                                  const std::vector<ModelCurve>& models);
 // One panel per channel, measured (grey) and model (red).
 Figure MeasuredVersusModelFigure(const std::string& title, const EstimationLog& log,
                                  const Eigen::MatrixXd& model);

@@ -15,6 +15,7 @@
 
 #include "core/atomic_file.h"
 #include "core/log.h"
+#include "tests/cli_test_dir.h"
 #include "tests/run_coaxid.h"
 
 namespace coaxid {
@@ -22,18 +23,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class EkfCliTest : public ::testing::Test {
+class EkfCliTest : public CliTestDir {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("coaxid_ekf_cli_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    config_ = std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml";
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
   // A 12 s flight of the shipped scenario (truth differs from the config).
   std::string SimulateFlight(const std::string& name) {
     const std::string scenario = Path("short.yaml");
@@ -50,8 +41,6 @@ class EkfCliTest : public ::testing::Test {
     return "identify --method=ekf --logs=" + logs + " --config=" + config_ + " --out=" + out +
            " " + extra;
   }
-  fs::path dir_;
-  std::string config_;
 };
 
 TEST_F(EkfCliTest, WritesTheReportAndHistories) {

@@ -16,6 +16,7 @@
 #include "core/atomic_file.h"
 #include "core/plot.h"
 #include "tests/ident/balance_test_util.h"
+#include "tests/cli_test_dir.h"
 #include "tests/run_coaxid.h"
 
 namespace coaxid {
@@ -24,18 +25,8 @@ namespace {
 namespace fs = std::filesystem;
 using testing_util::SimulatedBalance;
 
-class IdentifyCliTest : public ::testing::Test {
+class IdentifyCliTest : public CliTestDir {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("coaxid_identify_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    config_ = std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml";
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
   std::string WriteBalance(const std::string& name, const BalanceScenario& s, uint64_t seed) {
     WriteLog(Path(name), SimulatedBalance(s, seed));
     return Path(name);
@@ -45,8 +36,6 @@ class IdentifyCliTest : public ::testing::Test {
     return "identify --method=linear_kf --logs=" + logs + " --config=" + config_ + " --out=" + out +
            " " + extra;
   }
-  fs::path dir_;
-  std::string config_;
 };
 
 TEST_F(IdentifyCliTest, WritesTheReportTablesAndPlots) {
