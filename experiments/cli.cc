@@ -12,6 +12,7 @@
 #include "core/report.h"
 #include "dynamics/vehicle.h"
 #include "experiments/cli_flags.h"
+#include "experiments/command_checks.h"
 #include "experiments/compare_command.h"
 #include "experiments/demo_command.h"
 #include "experiments/discover_command.h"
@@ -47,18 +48,14 @@ constexpr const char* kUsage =
     "  demo     --out=DIR   (the whole story on the shipped data -> DIR/report.html)\n"
     "Run `coaxid --help` for every flag.\n";
 
-void RequireFlag(const std::string& value, const char* name) {
-  if (value.empty()) throw InputError(std::string("missing --") + name + "\n" + kUsage);
-}
-
 double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
 int Simulate() {
-  RequireFlag(FLAGS_config, "config");
-  RequireFlag(FLAGS_scenario, "scenario");
-  RequireFlag(FLAGS_out, "out");
+  RequireFlag(FLAGS_config, "config", kUsage);
+  RequireFlag(FLAGS_scenario, "scenario", kUsage);
+  RequireFlag(FLAGS_out, "out", kUsage);
   const VehicleConfig config = LoadVehicleConfig(FLAGS_config);
   Scenario scenario = LoadScenario(FLAGS_scenario);
   if (FLAGS_seed >= 0) scenario.seed = static_cast<uint64_t>(FLAGS_seed);
@@ -76,7 +73,7 @@ int Simulate() {
 }
 
 int Check() {
-  RequireFlag(FLAGS_logs, "logs");
+  RequireFlag(FLAGS_logs, "logs", kUsage);
   const std::vector<std::string> paths = SplitList(FLAGS_logs);
   if (paths.empty()) throw InputError("--logs names no file");
   std::vector<Log> logs;

@@ -16,6 +16,7 @@
 #include "core/vehicle_config.h"
 #include "experiments/cli.h"
 #include "experiments/cli_flags.h"
+#include "experiments/command_checks.h"
 #include "experiments/compare_table.h"
 #include "experiments/identify_command.h"
 
@@ -32,10 +33,6 @@ constexpr const char* kCompareUsage =
 
 double Since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
-void Require(const std::string& value, const char* flag) {
-  if (value.empty()) throw InputError(std::string("missing --") + flag + "\n" + kCompareUsage);
 }
 
 std::string Join(const std::vector<std::string>& parts) {
@@ -101,17 +98,11 @@ void Publish(const fs::path& staging, const std::string& out) {
 
 json Compare(const CompareRequest& request) {
   const Clock::time_point start = Clock::now();
-  Require(request.logs, "logs");
-  Require(request.config, "config");
-  Require(request.out, "out");
-  if (!(request.holdout_fraction >= 0 && request.holdout_fraction < 1)) {
-    throw InputError("--holdout_fraction must lie in [0, 1), got " +
-                     std::to_string(request.holdout_fraction));
-  }
-  std::error_code ec;
-  if (fs::exists(request.out, ec) && !fs::is_directory(request.out, ec)) {
-    throw InputError("--out=" + request.out + " exists and is not a folder");
-  }
+  RequireFlag(request.logs, "logs", kCompareUsage);
+  RequireFlag(request.config, "config", kCompareUsage);
+  RequireFlag(request.out, "out", kCompareUsage);
+  CheckHoldoutFraction(request.holdout_fraction);
+  CheckOutputFolder(request.out);
   // Every input is read and checked before any method runs.
   LoadVehicleConfig(request.config);
   const std::vector<std::string> paths = SplitList(request.logs);
@@ -144,6 +135,7 @@ json Compare(const CompareRequest& request) {
   fs::remove_all(staging);
   json comparison;
   std::string markdown;
+  std::error_code ec;
   try {
     fs::create_directories(staging / "plots", ec);
     if (ec) throw InputError("cannot create '" + staging.string() + "': " + ec.message());

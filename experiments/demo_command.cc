@@ -11,6 +11,7 @@
 #include "core/report.h"
 #include "dynamics/vehicle.h"
 #include "experiments/cli_flags.h"
+#include "experiments/command_checks.h"
 #include "experiments/compare_command.h"
 #include "experiments/demo_report.h"
 #include "experiments/discover_command.h"
@@ -36,13 +37,6 @@ double Since(Clock::time_point t) {
 const char* const kDemoScenarios[] = {"balance", "balance_points", "flight", "flight_3211",
                                       "balance_wake"};
 
-void MakeFolder(const std::string& dir) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir)) {
-    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
-  }
-}
 
 // "identical to the shipped log", or how it differs, or that there is none.
 std::string ReproducedText(const Log& log, const std::string& shipped_path) {
@@ -79,7 +73,7 @@ int RunDemo() {
   for (const char* name : kDemoScenarios) {
     scenarios.push_back(LoadScenario(root + "/configs/scenarios/" + name + ".yaml"));
   }
-  MakeFolder(out + "/logs");
+  MakeOutputFolder(out + "/logs");
 
   DemoRecord record;
   record.config = config_path;

@@ -12,6 +12,7 @@
 #include "dynamics/effects/effect_library.h"
 #include "experiments/cli.h"
 #include "experiments/cli_flags.h"
+#include "experiments/command_checks.h"
 #include "experiments/estimation_io.h"
 #include "ident/balance_holds.h"
 #include "ident/discovery.h"
@@ -29,10 +30,6 @@ namespace fs = std::filesystem;
 constexpr const char* kDiscoverUsage =
     "usage: coaxid discover --logs=A.csv[,B.csv] --config=F --out=DIR [--validate=C.csv] "
     "[--holdout_fraction=0.2] [--alpha=0.01] [--max_added=4] [--segment_s=1]";
-
-void Require(const std::string& value, const char* flag) {
-  if (value.empty()) throw InputError(std::string("missing --") + flag + "\n" + kDiscoverUsage);
-}
 
 std::string Num(double v, const char* fmt = "%.4g") {
   if (!std::isfinite(v)) return "-";
@@ -221,13 +218,10 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
 }  // namespace
 
 int RunDiscover() {
-  Require(FLAGS_logs, "logs");
-  Require(FLAGS_config, "config");
-  Require(FLAGS_out, "out");
-  std::error_code ec;
-  if (fs::exists(FLAGS_out, ec) && !fs::is_directory(FLAGS_out, ec)) {
-    throw InputError("--out=" + FLAGS_out + " exists and is not a folder");
-  }
+  RequireFlag(FLAGS_logs, "logs", kDiscoverUsage);
+  RequireFlag(FLAGS_config, "config", kDiscoverUsage);
+  RequireFlag(FLAGS_out, "out", kDiscoverUsage);
+  CheckOutputFolder(FLAGS_out);
   DiscoveryOptions options;
   options.alpha = FLAGS_alpha;
   options.max_added = FLAGS_max_added;
@@ -249,10 +243,7 @@ int RunDiscover() {
   const DiscoveryResult r = Discover(vehicle, split.estimation, split.validation, options);
 
   const std::string dir = FLAGS_out;
-  fs::create_directories(dir + "/plots", ec);
-  if (ec || !fs::is_directory(dir + "/plots")) {
-    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
-  }
+  MakeOutputFolder(dir + "/plots");
   WriteFileAtomically(dir + "/config.yaml", r.final.vehicle.ResolvedConfig());
   std::vector<std::string> plots;
   std::string plot_error;

@@ -18,6 +18,7 @@
 #include "dynamics/vehicle.h"
 #include "experiments/cli.h"
 #include "experiments/cli_flags.h"
+#include "experiments/command_checks.h"
 #include "experiments/identify_ekf.h"
 #include "experiments/identify_output_error.h"
 #include "ident/baseline_plots.h"
@@ -33,14 +34,9 @@ double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-void Require(const std::string& value, const char* flag) {
-  if (value.empty()) {
-    throw InputError(std::string("missing --") + flag +
-                     "\nusage: coaxid identify --method=linear_kf --logs=A.csv[,B.csv] "
-                     "--config=F --out=DIR [--validate=C.csv] [--holdout_fraction=0.2] "
-                     "[--process_noise=0]");
-  }
-}
+constexpr const char* kLinearKfUsage =
+    "usage: coaxid identify --method=linear_kf --logs=A.csv[,B.csv] --config=F --out=DIR "
+    "[--validate=C.csv] [--holdout_fraction=0.2] [--process_noise=0]";
 
 void CheckMethod(const std::string& method) {
   if (method == "linear_kf" || method == "output_error" || method == "ekf") return;
@@ -139,7 +135,7 @@ IdentifyRun IdentifyRunFromFlags() {
 }
 
 nlohmann::json Identify(const IdentifyRun& run) {
-  Require(run.method, "method");
+  RequireFlag(run.method, "method", kLinearKfUsage);
   CheckMethod(run.method);
   if (run.method == "output_error") return IdentifyOutputError(run);
   if (run.method == "ekf") return IdentifyEkf(run);
@@ -148,19 +144,14 @@ nlohmann::json Identify(const IdentifyRun& run) {
 
 nlohmann::json IdentifyLinearKf(const IdentifyRun& run) {
   const auto start = std::chrono::steady_clock::now();
-  Require(run.logs, "logs");
-  Require(run.config, "config");
-  Require(run.out, "out");
-  if (!(run.holdout_fraction >= 0 && run.holdout_fraction < 1)) {
-    throw InputError("--holdout_fraction must lie in [0, 1), got " + Number(run.holdout_fraction));
-  }
+  RequireFlag(run.logs, "logs", kLinearKfUsage);
+  RequireFlag(run.config, "config", kLinearKfUsage);
+  RequireFlag(run.out, "out", kLinearKfUsage);
+  CheckHoldoutFraction(run.holdout_fraction);
   if (!(FLAGS_process_noise >= 0 && std::isfinite(FLAGS_process_noise))) {
     throw InputError("--process_noise must be finite and >= 0, got " + Number(FLAGS_process_noise));
   }
-  std::error_code ec;
-  if (fs::exists(run.out, ec) && !fs::is_directory(run.out, ec)) {
-    throw InputError("--out=" + run.out + " exists and is not a folder");
-  }
+  CheckOutputFolder(run.out);
   const std::vector<std::string> paths = SplitList(run.logs);
   const std::vector<std::string> validate_paths = SplitList(run.validate);
   if (paths.empty()) throw InputError("--logs names no file");
@@ -220,10 +211,7 @@ nlohmann::json IdentifyLinearKf(const IdentifyRun& run) {
 
   // Everything is known: only now write.
   const std::string dir = run.out;
-  fs::create_directories(dir + "/plots", ec);
-  if (ec || !fs::is_directory(dir + "/plots")) {
-    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
-  }
+  MakeOutputFolder(dir + "/plots");
   std::set<std::string> taken;
   std::vector<std::string> stems, validation_stems;
   for (const BalanceData& d : estimation) stems.push_back(d.name);

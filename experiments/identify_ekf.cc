@@ -16,6 +16,7 @@
 #include "dynamics/vehicle.h"
 #include "experiments/cli.h"
 #include "experiments/cli_flags.h"
+#include "experiments/command_checks.h"
 #include "experiments/estimation_io.h"
 #include "ident/ekf.h"
 #include "ident/ekf_report.h"
@@ -39,10 +40,6 @@ constexpr const char* kUsage =
     "[--ekf_scale_anchor=d|none] [--ekf_transition=linearised|sensitivities] "
     "[--ekf_covariance_pass=true] [--ekf_process_noise=1] [--ekf_window_s=1] "
     "[--ekf_noise_adaptations=1] [--ekf_initial_report=R.json]";
-
-void Require(const std::string& value, const char* flag) {
-  if (value.empty()) throw InputError(std::string("missing --") + flag + "\n" + kUsage);
-}
 
 std::vector<Log> ReadFlightLogs(const std::vector<std::string>& paths, const char* flag) {
   std::vector<Log> logs;
@@ -132,13 +129,10 @@ void PrintEstimates(const EkfResult& r) {
 
 nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   const Clock::time_point start = Clock::now();
-  Require(run.logs, "logs");
-  Require(run.config, "config");
-  Require(run.out, "out");
-  if (!(run.holdout_fraction >= 0 && run.holdout_fraction < 1)) {
-    throw InputError("--holdout_fraction must lie in [0, 1), got " +
-                     std::to_string(run.holdout_fraction));
-  }
+  RequireFlag(run.logs, "logs", kUsage);
+  RequireFlag(run.config, "config", kUsage);
+  RequireFlag(run.out, "out", kUsage);
+  CheckHoldoutFraction(run.holdout_fraction);
   if (!(FLAGS_ekf_window_s > 0 && std::isfinite(FLAGS_ekf_window_s))) {
     throw InputError("--ekf_window_s must be > 0, got " + std::to_string(FLAGS_ekf_window_s));
   }
@@ -170,10 +164,7 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
                      std::to_string(FLAGS_ekf_noise_adaptations));
   }
   options.noise_adaptations = FLAGS_ekf_noise_adaptations;
-  std::error_code ec;
-  if (fs::exists(run.out, ec) && !fs::is_directory(run.out, ec)) {
-    throw InputError("--out=" + run.out + " exists and is not a folder");
-  }
+  CheckOutputFolder(run.out);
   const std::vector<std::string> paths = SplitList(run.logs);
   const std::vector<std::string> validate_paths = SplitList(run.validate);
   if (paths.empty()) throw InputError("--logs names no file");
@@ -284,10 +275,7 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
 
   // Everything is known: only now write.
   const std::string dir = run.out;
-  fs::create_directories(dir + "/plots", ec);
-  if (ec || !fs::is_directory(dir + "/plots")) {
-    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
-  }
+  MakeOutputFolder(dir + "/plots");
   nlohmann::json files = nlohmann::json::array();
   auto write = [&](const std::string& name, const std::string& text) {
     WriteFileAtomically(dir + "/" + name, text);

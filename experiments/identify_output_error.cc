@@ -14,6 +14,7 @@
 #include "dynamics/vehicle.h"
 #include "experiments/cli.h"
 #include "experiments/cli_flags.h"
+#include "experiments/command_checks.h"
 #include "experiments/estimation_io.h"
 #include "ident/balance_holds.h"
 #include "ident/linear_baseline.h"
@@ -44,14 +45,9 @@ double Since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-void Require(const std::string& value, const char* flag) {
-  if (value.empty()) {
-    throw InputError(std::string("missing --") + flag +
-                     "\nusage: coaxid identify --method=output_error --logs=A.csv[,B.csv] "
-                     "--config=F --out=DIR [--validate=C.csv] [--holdout_fraction=0.2] "
-                     "[--segment_s=1] [--start=config|linear_kf]");
-  }
-}
+constexpr const char* kOutputErrorUsage =
+    "usage: coaxid identify --method=output_error --logs=A.csv[,B.csv] --config=F --out=DIR "
+    "[--validate=C.csv] [--holdout_fraction=0.2] [--segment_s=1] [--start=config|linear_kf]";
 
 // Starting values from the paper's linear baseline on the balance logs.
 std::string StartFromBaseline(const std::vector<Log>& logs, Vehicle* vehicle) {
@@ -122,16 +118,14 @@ void PrintEstimates(const OutputErrorResult& result) {
 
 nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
   const auto start = Clock::now();
-  Require(run.logs, "logs");
-  Require(run.config, "config");
-  Require(run.out, "out");
+  RequireFlag(run.logs, "logs", kOutputErrorUsage);
+  RequireFlag(run.config, "config", kOutputErrorUsage);
+  RequireFlag(run.out, "out", kOutputErrorUsage);
+  CheckHoldoutFraction(run.holdout_fraction);
   if (FLAGS_start != "config" && FLAGS_start != "linear_kf") {
     throw InputError("--start must be config or linear_kf, got '" + FLAGS_start + "'");
   }
-  std::error_code ec;
-  if (fs::exists(run.out, ec) && !fs::is_directory(run.out, ec)) {
-    throw InputError("--out=" + run.out + " exists and is not a folder");
-  }
+  CheckOutputFolder(run.out);
   Vehicle vehicle = LoadVehicle(run.config);
   std::vector<Log> logs, validate;
   for (const std::string& path : SplitList(run.logs)) logs.push_back(ReadLog(path));
@@ -191,10 +185,7 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
 
   // Everything is known: only now write.
   const std::string dir = run.out;
-  fs::create_directories(dir + "/plots", ec);
-  if (ec || !fs::is_directory(dir + "/plots")) {
-    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
-  }
+  MakeOutputFolder(dir + "/plots");
   nlohmann::json files = nlohmann::json::array(), plots = nlohmann::json::array();
   std::string plot_error;
   std::set<std::string> used;

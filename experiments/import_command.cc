@@ -11,6 +11,7 @@
 #include "core/atomic_file.h"
 #include "core/errors.h"
 #include "experiments/cli_flags.h"
+#include "experiments/command_checks.h"
 
 namespace coaxid {
 namespace {
@@ -273,11 +274,7 @@ int RunImport() {
   }
   // Everything read and converted before anything is written.
   const auto logs = ConvertFormat(FLAGS_format, FLAGS_in);
-  std::error_code ec;
-  fs::create_directories(FLAGS_out, ec);
-  if (ec || !fs::is_directory(FLAGS_out)) {
-    throw InputError("cannot create output folder '" + FLAGS_out + "': " + ec.message());
-  }
+  MakeOutputFolder(FLAGS_out);
   for (const auto& [name, log] : logs) {
     const std::string path = (fs::path(FLAGS_out) / name).string();
     WriteLog(path, log);

@@ -14,6 +14,7 @@
 #include "core/report.h"
 #include "core/yaml_util.h"
 #include "experiments/cli_flags.h"
+#include "experiments/command_checks.h"
 #include "experiments/study_mpi.h"
 #include "experiments/study_plots.h"
 #include "experiments/study_records.h"
@@ -40,10 +41,6 @@ constexpr const char* kStudyUsage =
     "       coaxid study --spec=FILE --out=DIR --export=N\n"
     "       coaxid study --job=DIR/jobs/job_K.yaml [--jobs=N]\n"
     "       coaxid study --merge --out=DIR";
-
-void Require(const std::string& value, const char* flag) {
-  if (value.empty()) throw InputError(std::string("missing --") + flag + "\n" + kStudyUsage);
-}
 
 std::string Absolute(const std::string& path) {
   return fs::absolute(path).lexically_normal().string();
@@ -133,7 +130,7 @@ bool RunShard(const StudySpec& spec, const std::string& dir, const std::string& 
 }
 
 int Merge() {
-  Require(FLAGS_out, "out");
+  RequireFlag(FLAGS_out, "out", kStudyUsage);
   const StudySpec spec = SpecOfFolder(FLAGS_out);
   MergeRecords(spec, FLAGS_out);
   WriteStudySummary(spec, FLAGS_out);
@@ -266,8 +263,8 @@ int RunWithMpi(const MpiWorld& world) {
 int RunStudy() {
   if (FLAGS_merge) return Merge();
   if (!FLAGS_job.empty()) return Job();
-  Require(FLAGS_spec, "spec");
-  Require(FLAGS_out, "out");
+  RequireFlag(FLAGS_spec, "spec", kStudyUsage);
+  RequireFlag(FLAGS_out, "out", kStudyUsage);
   if (FLAGS_export < 0) throw InputError("--export must be a number of jobs >= 1");
   if (FLAGS_export > 0) return Export();
   const MpiWorld world = StartMpiIfLaunched();

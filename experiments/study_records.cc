@@ -12,6 +12,7 @@
 #include "core/atomic_file.h"
 #include "core/errors.h"
 #include "core/report.h"
+#include "experiments/command_checks.h"
 
 namespace coaxid {
 namespace {
@@ -57,11 +58,7 @@ void ReadRecordFile(const std::string& path, const StudySpec& spec,
 }  // namespace
 
 void PrepareStudyFolder(const StudySpec& spec, const std::string& dir, bool restart) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir)) {
-    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
-  }
+  MakeOutputFolder(dir);
   const std::string header_path = dir + "/study.json";
   if (fs::exists(header_path)) {
     const nlohmann::json old = ReadStudyHeader(dir);
@@ -73,6 +70,7 @@ void PrepareStudyFolder(const StudySpec& spec, const std::string& dir, bool rest
       }
     }
     if (restart) {
+      std::error_code ec;
       for (const char* name : {"runs.jsonl", "summary.json", "summary.md"}) {
         fs::remove(dir + "/" + name, ec);
       }
