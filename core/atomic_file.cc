@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,14 @@ void WriteFileAtomically(const std::string& path, const std::string& contents) {
   // close() can report a deferred write error (NFS, full disk); check it.
   if (::close(fd) != 0) fail_and_clean("cannot write", errno);
   if (::rename(tmp.c_str(), path.c_str()) != 0) fail_and_clean("cannot rename into place", errno);
+}
+
+void MakeOutputFolder(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir)) {
+    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
+  }
 }
 
 std::string ReadFile(const std::string& path) {

@@ -11,6 +11,9 @@ namespace coaxid {
 // the folder does not exist or cannot be written.
 void WriteFileAtomically(const std::string& path, const std::string& contents);
 
+// Creates the folder and its parents; InputError naming it if impossible.
+void MakeOutputFolder(const std::string& dir);
+
 // Reads a whole file. Throws InputError naming the path if it cannot be read.
 std::string ReadFile(const std::string& path);
 

@@ -14,7 +14,7 @@
 
 namespace coaxid {
 
-// Directions per pass, measured with bench/model_bench.cc (Jacobians with 12
+// Directions per pass, measured with bench/dynamics/model_bench.cc (Jacobians with 12
 // unknowns): with AVX (the default -march=native build) Eigen vectorises a
 // Jet<double, 8> fully and 8-wide passes win (1.1 us against 1.6 us for
 // 16-wide); without it a Jet evaluation costs about the same for 8 and 16

@@ -169,7 +169,7 @@ Integrator::Impl::Impl(const OdeSystem& system_in, const IntegratorOptions& opti
     N_VConst(0.0, y);
     // Fused vector kernels (one call per vector array instead of one per vector): CVODE's own
     // vectors and the sensitivity vectors are cloned from y and inherit this. Measured: -15%
-    // time with 20 sensitivities, neutral without (bench/integrator_bench.cc).
+    // time with 20 sensitivities, neutral without (bench/dynamics/integrator_bench.cc).
     check(N_VEnableFusedOps_Serial(y, SUNTRUE), "N_VEnableFusedOps_Serial");
     // Optimised kernels in place of the distribution's unoptimised ones (serial_vector_ops.h).
     if (options.optimized_vector_ops) UseOptimizedSerialOps(y);

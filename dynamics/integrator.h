@@ -40,7 +40,7 @@ struct IntegratorOptions {
   // Start each interval after a Reset() with a first step learned from the previous interval
   // (a tenth of the order-1 step CVODE chose after its first step there) instead of CVODE's
   // initial-step estimator, which costs extra RHS (and sensitivity RHS) evaluations at every
-  // restart. Same accuracy; measured in bench/integrator_bench.cc.
+  // restart. Same accuracy; measured in bench/dynamics/integrator_bench.cc.
   bool initial_step_hint = true;
   // Include the sensitivities in CVODE's local error test (CVodeSetSensErrCon). Off, the step
   // sizes follow the state alone and sensitivities cost far less; their accuracy then rests on

@@ -4,7 +4,7 @@
 // this gives the same sensitivities as CVODES's forward sensitivity module at
 // a fraction of the cost for this small model: CVODES works on one 12-long
 // vector per sensitivity, and its per-vector overhead dominates
-// (bench/flight_bench.cc measures both).
+// (bench/experiments/simulation/flight_bench.cc measures both).
 #pragma once
 
 #include <Eigen/Core>

@@ -1,34 +1,20 @@
-#include "experiments/cli.h"
+#include "experiments/cli/cli.h"
 
-#include <chrono>
-#include <cmath>
-#include <cstdio>
-#include <filesystem>
 #include <iostream>
 
-#include "core/atomic_file.h"
 #include "core/errors.h"
-#include "core/log.h"
-#include "core/report.h"
-#include "dynamics/vehicle.h"
-#include "experiments/cli_flags.h"
-#include "experiments/command_checks.h"
-#include "experiments/compare_command.h"
-#include "experiments/demo_command.h"
-#include "experiments/discover_command.h"
-#include "experiments/identify_command.h"
-#include "experiments/import_command.h"
-#include "experiments/log_summary.h"
-#include "experiments/scenario.h"
-#include "experiments/simulate_experiment.h"
-#include "experiments/study_command.h"
+#include "experiments/cli/check.h"
+#include "experiments/cli/compare.h"
+#include "experiments/cli/demo.h"
+#include "experiments/cli/discover.h"
+#include "experiments/cli/identify.h"
+#include "experiments/cli/import.h"
+#include "experiments/cli/simulate.h"
+#include "experiments/cli/study.h"
 
 namespace coaxid {
-namespace {
 
-namespace fs = std::filesystem;
-
-constexpr const char* kUsage =
+const char* const kCliUsage =
     "usage: coaxid <subcommand> [--flags]\n"
     "  simulate --config=F --scenario=S --out=FILE.csv [--truth=T.json] [--seed=N]\n"
     "  check    --logs=A.csv[,B.csv...] [--config=F]\n"
@@ -48,47 +34,6 @@ constexpr const char* kUsage =
     "  demo     --out=DIR   (the whole story on the shipped data -> DIR/report.html)\n"
     "Run `coaxid --help` for every flag.\n";
 
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-int Simulate() {
-  RequireFlag(FLAGS_config, "config", kUsage);
-  RequireFlag(FLAGS_scenario, "scenario", kUsage);
-  RequireFlag(FLAGS_out, "out", kUsage);
-  const VehicleConfig config = LoadVehicleConfig(FLAGS_config);
-  Scenario scenario = LoadScenario(FLAGS_scenario);
-  if (FLAGS_seed >= 0) scenario.seed = static_cast<uint64_t>(FLAGS_seed);
-  const Vehicle truth = MakeTruthVehicle(config, scenario);
-  const auto start = std::chrono::steady_clock::now();
-  const Log log = SimulateScenario(truth, scenario);
-  // Write only after everything succeeded: nothing half-written.
-  WriteLog(FLAGS_out, log);
-  if (!FLAGS_truth.empty()) WriteJson(FLAGS_truth, TruthJson(truth));
-  std::fprintf(stderr, "simulate: %s log, %d rows, %.2f s simulated in %.3f s -> %s\n",
-               LogKindName(log.kind), log.NumRows(),
-               log.Column("t").back() - log.Column("t").front(), Seconds(start),
-               FLAGS_out.c_str());
-  return 0;
-}
-
-int Check() {
-  RequireFlag(FLAGS_logs, "logs", kUsage);
-  const std::vector<std::string> paths = SplitList(FLAGS_logs);
-  if (paths.empty()) throw InputError("--logs names no file");
-  std::vector<Log> logs;
-  for (const std::string& path : paths) logs.push_back(ReadLog(path));
-  for (const Log& log : logs) {
-    const nlohmann::json summary = SummarizeLog(log);
-    std::cout << SummaryMarkdown(log.source, summary);
-  }
-  std::cout << LinearKfCheckText(logs, FLAGS_config);
-  std::cout << "check: " << logs.size() << " log(s) valid\n";
-  return 0;
-}
-
-}  // namespace
-
 std::vector<std::string> SplitList(const std::string& list) {
   std::vector<std::string> out;
   size_t start = 0;
@@ -105,24 +50,24 @@ std::vector<std::string> SplitList(const std::string& list) {
 
 int RunCli(int argc, char** argv) {
   if (argc < 2) {
-    std::cerr << kUsage;
+    std::cerr << kCliUsage;
     return 2;
   }
   const std::string command = argv[1];
   if (argc > 2) {
-    std::cerr << "coaxid: unexpected argument '" << argv[2] << "'\n" << kUsage;
+    std::cerr << "coaxid: unexpected argument '" << argv[2] << "'\n" << kCliUsage;
     return 2;
   }
   try {
-    if (command == "simulate") return Simulate();
-    if (command == "check") return Check();
+    if (command == "simulate") return RunSimulate();
+    if (command == "check") return RunCheck();
     if (command == "demo") return RunDemo();
     if (command == "compare") return RunCompare();
     if (command == "identify") return RunIdentify();
     if (command == "discover") return RunDiscover();
     if (command == "import") return RunImport();
     if (command == "study") return RunStudy();
-    std::cerr << "coaxid: unknown subcommand '" << command << "'\n" << kUsage;
+    std::cerr << "coaxid: unknown subcommand '" << command << "'\n" << kCliUsage;
     return 2;
   } catch (const InputError& e) {
     std::cerr << "coaxid " << command << ": " << e.what() << "\n";

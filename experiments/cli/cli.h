@@ -8,6 +8,9 @@
 
 namespace coaxid {
 
+// Every subcommand's flags on one screen, printed after a call it cannot run.
+extern const char* const kCliUsage;
+
 // argv[0] is the program, argv[1] the subcommand; flags already parsed by gflags.
 int RunCli(int argc, char** argv);
 

@@ -1,4 +1,4 @@
-#include "experiments/compare_command.h"
+#include "experiments/cli/compare.h"
 
 #include <unistd.h>
 
@@ -14,11 +14,11 @@
 #include "core/plot.h"
 #include "core/report.h"
 #include "core/vehicle_config.h"
-#include "experiments/cli.h"
-#include "experiments/cli_flags.h"
-#include "experiments/command_checks.h"
-#include "experiments/compare_table.h"
-#include "experiments/identify_command.h"
+#include "experiments/cli/cli.h"
+#include "experiments/cli/flag_checks.h"
+#include "experiments/cli/flags.h"
+#include "experiments/cli/identify.h"
+#include "experiments/reports/compare_table.h"
 
 namespace coaxid {
 namespace {

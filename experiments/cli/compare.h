@@ -6,10 +6,10 @@
 // linear_kf runs on the balance logs (skipped, with the reason, when there is
 // none), output_error on all logs, ekf on the flight logs (skipped when there
 // is none); each through the same code as `coaxid identify`
-// (experiments/identify_command.h), in process, timed. The validation logs
+// (experiments/cli/identify.h), in process, timed. The validation logs
 // are shared out the same way; without them each method holds out the final
 // part of each of its logs. Writes
-//   DIR/compare.json, DIR/compare.md   the table (experiments/compare_table.h)
+//   DIR/compare.json, DIR/compare.md   the table (experiments/reports/compare_table.h)
 //   DIR/plots/estimates.png            estimate vs truth (or vs output_error) per method
 //   DIR/linear_kf/, DIR/output_error/, DIR/ekf/   each method's full identify output
 // and prints compare.md on stdout. Bad input (a log, the config, the truth

@@ -1,4 +1,4 @@
-#include "experiments/demo_command.h"
+#include "experiments/cli/demo.h"
 
 #include <chrono>
 #include <cmath>
@@ -9,17 +9,17 @@
 #include "core/errors.h"
 #include "core/log.h"
 #include "core/report.h"
-#include "dynamics/vehicle.h"
-#include "experiments/cli_flags.h"
-#include "experiments/command_checks.h"
-#include "experiments/compare_command.h"
-#include "experiments/demo_report.h"
-#include "experiments/discover_command.h"
-#include "experiments/log_summary.h"
-#include "experiments/markdown_html.h"
 #include "core/report_values.h"
-#include "experiments/scenario.h"
-#include "experiments/simulate_experiment.h"
+#include "dynamics/vehicle.h"
+#include "experiments/cli/compare.h"
+#include "experiments/cli/discover.h"
+#include "experiments/cli/flag_checks.h"
+#include "experiments/cli/flags.h"
+#include "experiments/reports/demo_report.h"
+#include "experiments/reports/log_summary.h"
+#include "experiments/reports/markdown_html.h"
+#include "experiments/simulation/scenario.h"
+#include "experiments/simulation/simulate_experiment.h"
 
 namespace coaxid {
 namespace {

@@ -9,7 +9,7 @@
 //     (DIR/discover_simulated/) and on the measured T-motor test-stand data
 //     (DIR/discover_tmotor28/).
 // Ends with one report, DIR/report.html (self-contained, opens in a browser)
-// and the same as DIR/report.md (experiments/demo_report.h), plus
+// and the same as DIR/report.md (experiments/reports/demo_report.h), plus
 // DIR/summary.json for programs. Progress on stderr.
 #pragma once
 

@@ -1,4 +1,4 @@
-#include "experiments/discover_command.h"
+#include "experiments/cli/discover.h"
 
 #include <cmath>
 #include <cstdio>
@@ -10,12 +10,12 @@
 #include "core/plot.h"
 #include "core/report.h"
 #include "dynamics/effects/effect_library.h"
-#include "experiments/cli.h"
-#include "experiments/cli_flags.h"
-#include "experiments/command_checks.h"
-#include "experiments/estimation_io.h"
-#include "ident/balance_holds.h"
-#include "ident/discovery.h"
+#include "experiments/cli/cli.h"
+#include "experiments/cli/estimation_io.h"
+#include "experiments/cli/flag_checks.h"
+#include "experiments/cli/flags.h"
+#include "ident/baseline/balance_holds.h"
+#include "ident/discover/discovery.h"
 
 DEFINE_double(alpha, 0.01,
               "discover: significance level of the candidate tests (family-wise per round, Holm)");

@@ -1,9 +1,9 @@
-#include "experiments/estimation_io.h"
+#include "experiments/cli/estimation_io.h"
 
 #include <cmath>
 #include <sstream>
 
-#include "ident/balance_holds.h"
+#include "ident/baseline/balance_holds.h"
 
 namespace coaxid {
 

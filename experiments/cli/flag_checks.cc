@@ -1,4 +1,4 @@
-#include "experiments/command_checks.h"
+#include "experiments/cli/flag_checks.h"
 
 #include <filesystem>
 
@@ -21,14 +21,6 @@ void CheckOutputFolder(const std::string& out) {
   std::error_code ec;
   if (std::filesystem::exists(out, ec) && !std::filesystem::is_directory(out, ec)) {
     throw InputError("--out=" + out + " exists and is not a folder");
-  }
-}
-
-void MakeOutputFolder(const std::string& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir)) {
-    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
   }
 }
 

@@ -15,7 +15,4 @@ void CheckHoldoutFraction(double fraction);
 // --out may be missing or a folder, not an existing file.
 void CheckOutputFolder(const std::string& out);
 
-// Creates the folder and its parents; InputError naming it if impossible.
-void MakeOutputFolder(const std::string& dir);
-
 }  // namespace coaxid

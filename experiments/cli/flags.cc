@@ -1,4 +1,4 @@
-#include "experiments/cli_flags.h"
+#include "experiments/cli/flags.h"
 
 DEFINE_string(config, "", "vehicle config (YAML), e.g. configs/glmav.yaml");
 DEFINE_string(scenario, "",
@@ -23,11 +23,11 @@ DEFINE_double(process_noise, 0.0,
               "identify --method=linear_kf: Kalman process noise, Q = q diag(scale^2) per "
               "sample (the paper: 0)");
 
-// import (experiments/import_command.h).
+// import (experiments/cli/import.h).
 DEFINE_string(format, "", "import: the rig's file format (tmotor28)");
 DEFINE_string(in, "", "import: folder holding the rig's own CSV files");
 
-// identify --method=ekf (experiments/identify_ekf.h).
+// identify --method=ekf (experiments/cli/identify_ekf.h).
 DEFINE_bool(smoother, true,
             "identify --method=ekf: Rauch-Tung-Striebel smoother over the logs (smoothed states "
             "in states.csv and as the fit windows' start states)");

@@ -14,10 +14,10 @@ DECLARE_string(method);
 DECLARE_string(validate);
 DECLARE_double(holdout_fraction);
 DECLARE_double(process_noise);
-// import (experiments/import_command.h).
+// import (experiments/cli/import.h).
 DECLARE_string(format);
 DECLARE_string(in);
-// identify --method=ekf (experiments/identify_ekf.h).
+// identify --method=ekf (experiments/cli/identify_ekf.h).
 DECLARE_bool(smoother);
 DECLARE_bool(ekf_covariance_pass);
 DECLARE_string(ekf_scale_anchor);

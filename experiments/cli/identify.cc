@@ -1,4 +1,4 @@
-#include "experiments/identify_command.h"
+#include "experiments/cli/identify.h"
 
 #include <cctype>
 #include <chrono>
@@ -16,14 +16,14 @@
 #include "core/plot.h"
 #include "core/report.h"
 #include "dynamics/vehicle.h"
-#include "experiments/cli.h"
-#include "experiments/cli_flags.h"
-#include "experiments/command_checks.h"
-#include "experiments/identify_ekf.h"
-#include "experiments/identify_output_error.h"
-#include "ident/baseline_plots.h"
-#include "ident/baseline_report.h"
-#include "ident/linear_baseline.h"
+#include "experiments/cli/cli.h"
+#include "experiments/cli/flag_checks.h"
+#include "experiments/cli/flags.h"
+#include "experiments/cli/identify_ekf.h"
+#include "experiments/cli/identify_output_error.h"
+#include "ident/baseline/linear_baseline.h"
+#include "ident/baseline/plots.h"
+#include "ident/baseline/report.h"
 
 namespace coaxid {
 namespace {

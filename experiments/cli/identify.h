@@ -19,7 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/log.h"
-#include "experiments/identify_run.h"
+#include "experiments/cli/identify_run.h"
 
 namespace coaxid {
 

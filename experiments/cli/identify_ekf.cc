@@ -1,4 +1,4 @@
-#include "experiments/identify_ekf.h"
+#include "experiments/cli/identify_ekf.h"
 
 #include <cctype>
 #include <chrono>
@@ -14,15 +14,15 @@
 #include "core/plot.h"
 #include "core/report.h"
 #include "dynamics/vehicle.h"
-#include "experiments/cli.h"
-#include "experiments/cli_flags.h"
-#include "experiments/command_checks.h"
-#include "experiments/estimation_io.h"
-#include "ident/ekf.h"
-#include "ident/ekf_report.h"
+#include "experiments/cli/cli.h"
+#include "experiments/cli/estimation_io.h"
+#include "experiments/cli/flag_checks.h"
+#include "experiments/cli/flags.h"
+#include "ident/ekf/ekf.h"
+#include "ident/ekf/report.h"
 #include "ident/estimation_log.h"
 #include "ident/noise_weights.h"
-#include "ident/output_error.h"  // ChannelFitErrors
+#include "ident/output_error/output_error.h"  // ChannelFitErrors
 
 namespace coaxid {
 namespace {
@@ -180,7 +180,7 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   const std::vector<Log> logs = ReadFlightLogs(paths, "logs");
   const std::vector<Log> validate_logs = ReadFlightLogs(validate_paths, "validate");
 
-  // Estimation and validation data (experiments/estimation_io.h).
+  // Estimation and validation data (experiments/cli/estimation_io.h).
   LogSplit split = SplitEstimationAndValidation(logs, validate_logs, run.holdout_fraction);
   std::vector<EstimationLog>& estimation = split.estimation;
   std::vector<EstimationLog>& validation = split.validation;

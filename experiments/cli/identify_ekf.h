@@ -1,4 +1,4 @@
-// `coaxid identify --method=ekf` (cli-and-reports.md; ident/ekf.h):
+// `coaxid identify --method=ekf` (cli-and-reports.md; ident/ekf/ekf.h):
 //
 //   coaxid identify --method=ekf --logs=A.csv[,B.csv] --config=F --out=DIR
 //       [--validate=C.csv,...] [--holdout_fraction=0.2] [--smoother=true]
@@ -31,7 +31,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "experiments/identify_run.h"
+#include "experiments/cli/identify_run.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "experiments/identify_output_error.h"
+#include "experiments/cli/identify_output_error.h"
 
 #include <chrono>
 #include <cmath>
@@ -12,13 +12,13 @@
 #include "core/plot.h"
 #include "core/report.h"
 #include "dynamics/vehicle.h"
-#include "experiments/cli.h"
-#include "experiments/cli_flags.h"
-#include "experiments/command_checks.h"
-#include "experiments/estimation_io.h"
-#include "ident/balance_holds.h"
-#include "ident/linear_baseline.h"
-#include "ident/output_error.h"
+#include "experiments/cli/cli.h"
+#include "experiments/cli/estimation_io.h"
+#include "experiments/cli/flag_checks.h"
+#include "experiments/cli/flags.h"
+#include "ident/baseline/balance_holds.h"
+#include "ident/baseline/linear_baseline.h"
+#include "ident/output_error/output_error.h"
 
 DEFINE_double(segment_s, 1.0,
               "output_error: multiple-shooting segment length and prediction window [s]");

@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "experiments/identify_run.h"
+#include "experiments/cli/identify_run.h"
 
 namespace coaxid {
 

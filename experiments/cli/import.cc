@@ -1,4 +1,4 @@
-#include "experiments/import_command.h"
+#include "experiments/cli/import.h"
 
 #include <cerrno>
 #include <cmath>
@@ -10,8 +10,8 @@
 
 #include "core/atomic_file.h"
 #include "core/errors.h"
-#include "experiments/cli_flags.h"
-#include "experiments/command_checks.h"
+#include "experiments/cli/flag_checks.h"
+#include "experiments/cli/flags.h"
 
 namespace coaxid {
 namespace {

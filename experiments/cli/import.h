@@ -7,7 +7,7 @@
 // separator, the log it becomes, the metadata written with it, and one rule per
 // log column (a sum of source columns times factors, plus a constant; the row
 // index for t). Another rig is one more entry in the table of formats
-// (import_command.cc, Formats()); the conventions of each mapping are
+// (import.cc, Formats()); the conventions of each mapping are
 // documented there and in data/real/<rig>/README.md.
 //
 // Every source file is read and converted before anything is written; the

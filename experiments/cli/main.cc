@@ -2,7 +2,7 @@
 #include <gflags/gflags.h>
 #include <glog/logging.h>
 
-#include "experiments/cli.h"
+#include "experiments/cli/cli.h"
 
 int main(int argc, char** argv) {
   gflags::SetUsageMessage("coaxid <simulate|check|identify|demo> [--flags]");

@@ -1,4 +1,4 @@
-#include "experiments/study_command.h"
+#include "experiments/cli/study.h"
 
 #include <unistd.h>
 
@@ -13,13 +13,13 @@
 #include "core/plot.h"
 #include "core/report.h"
 #include "core/yaml_util.h"
-#include "experiments/cli_flags.h"
-#include "experiments/command_checks.h"
-#include "experiments/study_mpi.h"
-#include "experiments/study_plots.h"
-#include "experiments/study_records.h"
-#include "experiments/study_runner.h"
-#include "experiments/study_summary.h"
+#include "experiments/cli/flag_checks.h"
+#include "experiments/cli/flags.h"
+#include "experiments/studies/mpi.h"
+#include "experiments/studies/plots.h"
+#include "experiments/studies/records.h"
+#include "experiments/studies/runner.h"
+#include "experiments/studies/summary.h"
 
 DEFINE_string(spec, "", "study: the study spec (YAML, docs/study.md)");
 DEFINE_int32(jobs, 0, "study: worker threads (0: every core; under mpirun: 1 per rank)");

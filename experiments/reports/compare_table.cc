@@ -1,4 +1,4 @@
-#include "experiments/compare_table.h"
+#include "experiments/reports/compare_table.h"
 
 #include <algorithm>
 #include <cmath>

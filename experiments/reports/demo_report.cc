@@ -1,12 +1,12 @@
-#include "experiments/demo_report.h"
+#include "experiments/reports/demo_report.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 
-#include "experiments/compare_table.h"
 #include "core/report_values.h"
+#include "experiments/reports/compare_table.h"
 
 namespace coaxid {
 namespace {

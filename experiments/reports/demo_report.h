@@ -1,9 +1,9 @@
 // The one report of `coaxid demo`: the whole story on the shipped data, as
 // Markdown (DIR/report.md) and the same as a self-contained HTML page
-// (DIR/report.html, experiments/markdown_html.h). Sections per step:
+// (DIR/report.html, experiments/reports/markdown_html.h). Sections per step:
 // simulation and reproducibility, the paper's linear baseline, output error,
 // the EKF (each: estimates against the truth, key plots), the comparison of
-// the three (experiments/compare_table.h), and discover on a simulated log with
+// the three (experiments/reports/compare_table.h), and discover on a simulated log with
 // an undeclared effect and on measured test-stand data (error before/after).
 // Pure: from what the demo ran to text; paths are relative to DIR.
 #pragma once

@@ -1,4 +1,4 @@
-#include "experiments/log_summary.h"
+#include "experiments/reports/log_summary.h"
 
 #include <cmath>
 #include <cstdio>

@@ -1,4 +1,4 @@
-#include "experiments/markdown_html.h"
+#include "experiments/reports/markdown_html.h"
 
 #include <sstream>
 #include <vector>

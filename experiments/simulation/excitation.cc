@@ -1,4 +1,4 @@
-#include "experiments/excitation.h"
+#include "experiments/simulation/excitation.h"
 
 #include <cmath>
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/input_hold.h"
-#include "experiments/scenario.h"
+#include "experiments/simulation/scenario.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "experiments/hover_controller.h"
+#include "experiments/simulation/hover_controller.h"
 
 #include <algorithm>
 #include <cmath>

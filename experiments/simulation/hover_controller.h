@@ -9,7 +9,7 @@
 #include <string>
 
 #include "core/input_hold.h"
-#include "experiments/scenario.h"
+#include "experiments/simulation/scenario.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "experiments/scenario.h"
+#include "experiments/simulation/scenario.h"
 
 #include <algorithm>
 #include <filesystem>

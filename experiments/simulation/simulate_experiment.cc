@@ -1,4 +1,4 @@
-#include "experiments/simulate_experiment.h"
+#include "experiments/simulation/simulate_experiment.h"
 
 #include <cmath>
 #include <cstdio>
@@ -8,8 +8,8 @@
 #include "dynamics/outputs.h"
 #include "dynamics/trim.h"
 #include "dynamics/vehicle_ode.h"
-#include "experiments/excitation.h"
-#include "experiments/hover_controller.h"
+#include "experiments/simulation/excitation.h"
+#include "experiments/simulation/hover_controller.h"
 
 namespace coaxid {
 

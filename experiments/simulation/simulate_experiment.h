@@ -10,7 +10,7 @@
 #include "core/log.h"
 #include "dynamics/integrator.h"
 #include "dynamics/vehicle.h"
-#include "experiments/scenario.h"
+#include "experiments/simulation/scenario.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "experiments/study_mpi.h"
+#include "experiments/studies/mpi.h"
 
 #include <cstdlib>
 

@@ -1,4 +1,4 @@
-#include "experiments/study_plots.h"
+#include "experiments/studies/plots.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <map>
 #include <set>
 
-#include "experiments/study_summary.h"
+#include "experiments/studies/summary.h"
 
 namespace coaxid {
 namespace {

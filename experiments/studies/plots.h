@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/plot.h"
-#include "experiments/study_spec.h"
+#include "experiments/studies/spec.h"
 
 namespace coaxid {
 

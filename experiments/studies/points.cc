@@ -1,4 +1,4 @@
-#include "experiments/study_points.h"
+#include "experiments/studies/points.h"
 
 #include <algorithm>
 #include <random>

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "dynamics/vehicle.h"
-#include "experiments/scenario.h"
-#include "experiments/study_spec.h"
+#include "experiments/simulation/scenario.h"
+#include "experiments/studies/spec.h"
 
 namespace coaxid {
 

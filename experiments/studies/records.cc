@@ -1,4 +1,4 @@
-#include "experiments/study_records.h"
+#include "experiments/studies/records.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -12,7 +12,6 @@
 #include "core/atomic_file.h"
 #include "core/errors.h"
 #include "core/report.h"
-#include "experiments/command_checks.h"
 
 namespace coaxid {
 namespace {

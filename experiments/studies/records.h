@@ -2,7 +2,7 @@
 //   DIR/study.json        what study the folder holds (spec, its hash, the run count)
 //   DIR/runs.jsonl        one JSON line per finished run, appended as runs finish
 //   DIR/parts/*.jsonl     the same, one file per exported job or MPI rank
-//   DIR/summary.json, DIR/summary.md, DIR/plots/   (experiments/study_summary.h)
+//   DIR/summary.json, DIR/summary.md, DIR/plots/   (experiments/studies/summary.h)
 // Lines are written whole with one write() and fsync'ed, so an interrupted
 // study loses at most the runs in flight; a torn last line (power loss) is
 // dropped when the file is read or appended to again.
@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "experiments/study_spec.h"
+#include "experiments/studies/spec.h"
 
 namespace coaxid {
 

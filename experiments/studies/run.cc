@@ -1,19 +1,19 @@
-#include "experiments/study_run.h"
+#include "experiments/studies/run.h"
 
 #include <cmath>
 
 #include "core/errors.h"
 #include "core/log.h"
 #include "dynamics/vehicle.h"
-#include "experiments/simulate_experiment.h"
-#include "experiments/study_points.h"
-#include "ident/balance_holds.h"
-#include "ident/discovery.h"
-#include "ident/ekf.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "experiments/studies/points.h"
+#include "ident/baseline/balance_holds.h"
+#include "ident/baseline/linear_baseline.h"
+#include "ident/discover/discovery.h"
+#include "ident/ekf/ekf.h"
 #include "ident/estimation_log.h"
-#include "ident/linear_baseline.h"
 #include "ident/noise_weights.h"
-#include "ident/output_error.h"
+#include "ident/output_error/output_error.h"
 
 namespace coaxid {
 namespace {

@@ -1,4 +1,4 @@
-// One run of a study (experiments/study_spec.h): simulate the point's
+// One run of a study (experiments/studies/spec.h): simulate the point's
 // scenarios with the run's seed, run every method of the spec on the logs,
 // and record per parameter the estimate, the reported std and the truth.
 // A pure function of (spec, point, seed): each method runs single-threaded
@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "experiments/study_spec.h"
+#include "experiments/studies/spec.h"
 
 namespace coaxid {
 

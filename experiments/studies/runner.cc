@@ -1,4 +1,4 @@
-#include "experiments/study_runner.h"
+#include "experiments/studies/runner.h"
 
 #include <atomic>
 #include <algorithm>
@@ -10,7 +10,7 @@
 #include <mutex>
 #include <thread>
 
-#include "experiments/study_run.h"
+#include "experiments/studies/run.h"
 
 namespace coaxid {
 namespace {

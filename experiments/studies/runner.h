@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "experiments/study_records.h"
-#include "experiments/study_spec.h"
+#include "experiments/studies/records.h"
+#include "experiments/studies/spec.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "experiments/study_spec.h"
+#include "experiments/studies/spec.h"
 
 #include <cmath>
 #include <cstdio>
@@ -9,8 +9,8 @@
 #include "core/errors.h"
 #include "core/yaml_util.h"
 #include "dynamics/vehicle.h"
-#include "experiments/simulate_experiment.h"
-#include "experiments/study_points.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "experiments/studies/points.h"
 
 namespace coaxid {
 namespace {

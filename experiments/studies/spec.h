@@ -1,7 +1,7 @@
 // Study spec files (docs/study.md, configs/studies/*.yaml): a Monte Carlo or
 // sensitivity study of the estimators on simulated logs. A study is a list of
 // runs, one per (sweep point, seed); each run is a pure function of the spec,
-// the point and the seed (experiments/study_run.h), so runs can be done in any
+// the point and the seed (experiments/studies/run.h), so runs can be done in any
 // order, on any number of threads, processes or machines.
 #pragma once
 
@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/vehicle_config.h"
-#include "experiments/scenario.h"
+#include "experiments/simulation/scenario.h"
 
 namespace coaxid {
 

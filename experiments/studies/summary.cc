@@ -1,4 +1,4 @@
-#include "experiments/study_summary.h"
+#include "experiments/studies/summary.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,8 +8,8 @@
 #include <set>
 
 #include "core/statistics.h"
-#include "experiments/simulate_experiment.h"
-#include "experiments/study_points.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "experiments/studies/points.h"
 
 namespace coaxid {
 namespace {

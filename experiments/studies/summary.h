@@ -14,7 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "experiments/study_spec.h"
+#include "experiments/studies/spec.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "ident/balance_holds.h"
+#include "ident/baseline/balance_holds.h"
 
 #include <glog/logging.h>
 

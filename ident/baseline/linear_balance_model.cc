@@ -1,4 +1,4 @@
-#include "ident/linear_balance_model.h"
+#include "ident/baseline/linear_balance_model.h"
 
 #include <glog/logging.h>
 

@@ -26,7 +26,7 @@
 
 #include "core/input_hold.h"
 #include "core/vehicle_config.h"
-#include "ident/balance_holds.h"
+#include "ident/baseline/balance_holds.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "ident/linear_baseline.h"
+#include "ident/baseline/linear_baseline.h"
 
 #include <cmath>
 #include <cstdio>

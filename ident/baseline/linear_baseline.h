@@ -23,13 +23,13 @@
 #include <vector>
 
 #include "core/parameters.h"
-#include "ident/balance_holds.h"
-#include "ident/excitation.h"
-#include "ident/linear_kf.h"
-#include "ident/map_uncertainty.h"
-#include "ident/noise_covariance.h"
-#include "ident/reconstruction.h"
-#include "ident/thrust_map.h"
+#include "ident/baseline/balance_holds.h"
+#include "ident/baseline/linear_kf.h"
+#include "ident/baseline/map_uncertainty.h"
+#include "ident/baseline/noise_covariance.h"
+#include "ident/baseline/persistent_excitation.h"
+#include "ident/baseline/reconstruction.h"
+#include "ident/baseline/thrust_map.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "ident/linear_kf.h"
+#include "ident/baseline/linear_kf.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/QR>

@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "ident/linear_balance_model.h"
+#include "ident/baseline/linear_balance_model.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "ident/map_uncertainty.h"
+#include "ident/baseline/map_uncertainty.h"
 
 #include <glog/logging.h>
 

@@ -26,9 +26,9 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "ident/linear_balance_model.h"
-#include "ident/linear_kf.h"
-#include "ident/thrust_map.h"
+#include "ident/baseline/linear_balance_model.h"
+#include "ident/baseline/linear_kf.h"
+#include "ident/baseline/thrust_map.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "ident/noise_covariance.h"
+#include "ident/baseline/noise_covariance.h"
 
 #include <cmath>
 #include <string>

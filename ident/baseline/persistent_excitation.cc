@@ -1,4 +1,4 @@
-#include "ident/excitation.h"
+#include "ident/baseline/persistent_excitation.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

@@ -32,8 +32,8 @@
 #include <string>
 #include <vector>
 
-#include "ident/balance_holds.h"
-#include "ident/linear_balance_model.h"
+#include "ident/baseline/balance_holds.h"
+#include "ident/baseline/linear_balance_model.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "ident/baseline_plots.h"
+#include "ident/baseline/plots.h"
 
 #include <algorithm>
 #include <cmath>

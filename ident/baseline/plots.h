@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "core/plot.h"
-#include "ident/linear_baseline.h"
+#include "ident/baseline/linear_baseline.h"
 
 namespace coaxid {
 

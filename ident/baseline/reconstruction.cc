@@ -1,4 +1,4 @@
-#include "ident/reconstruction.h"
+#include "ident/baseline/reconstruction.h"
 
 #include <algorithm>
 #include <cmath>

@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "core/statistics.h"
-#include "ident/balance_holds.h"
-#include "ident/linear_balance_model.h"
+#include "ident/baseline/balance_holds.h"
+#include "ident/baseline/linear_balance_model.h"
 
 namespace coaxid {
 

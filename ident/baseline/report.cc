@@ -1,4 +1,4 @@
-#include "ident/baseline_report.h"
+#include "ident/baseline/report.h"
 
 #include <cmath>
 #include <cstdio>

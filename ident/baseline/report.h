@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/parameters.h"
-#include "ident/linear_baseline.h"
+#include "ident/baseline/linear_baseline.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "ident/thrust_map.h"
+#include "ident/baseline/thrust_map.h"
 
 #include <glog/logging.h>
 

@@ -29,7 +29,7 @@
 #include <vector>
 
 #include "core/vehicle_config.h"
-#include "ident/balance_holds.h"
+#include "ident/baseline/balance_holds.h"
 
 namespace coaxid {
 

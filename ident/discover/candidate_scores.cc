@@ -1,14 +1,14 @@
-#include "ident/candidate_scores.h"
+#include "ident/discover/candidate_scores.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 
+#include "core/errors.h"
 #include "dynamics/effects/effect_library.h"
 #include "dynamics/model_jacobian.h"
 #include "dynamics/outputs.h"
-#include "core/errors.h"
-#include "ident/residual_analysis.h"
+#include "ident/discover/residual_analysis.h"
 
 namespace coaxid {
 namespace {

@@ -30,9 +30,9 @@
 #include <vector>
 
 #include "dynamics/vehicle.h"
+#include "ident/discover/linearised_fit.h"
 #include "ident/estimation_log.h"
-#include "ident/linearised_fit.h"
-#include "ident/output_error.h"
+#include "ident/output_error/output_error.h"
 
 namespace coaxid {
 

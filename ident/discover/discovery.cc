@@ -1,4 +1,4 @@
-#include "ident/discovery.h"
+#include "ident/discover/discovery.h"
 
 #include <algorithm>
 #include <chrono>

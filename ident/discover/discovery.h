@@ -16,11 +16,11 @@
 #include <nlohmann/json.hpp>
 
 #include "dynamics/vehicle.h"
-#include "ident/candidate_scores.h"
+#include "ident/discover/candidate_scores.h"
+#include "ident/discover/generic_dictionary.h"
+#include "ident/discover/residual_analysis.h"
 #include "ident/estimation_log.h"
-#include "ident/generic_dictionary.h"
-#include "ident/output_error.h"
-#include "ident/residual_analysis.h"
+#include "ident/output_error/output_error.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "ident/generic_dictionary.h"
+#include "ident/discover/generic_dictionary.h"
 
 #include <algorithm>
 #include <cmath>

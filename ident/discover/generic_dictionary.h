@@ -27,7 +27,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
-#include "ident/residual_analysis.h"
+#include "ident/discover/residual_analysis.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "ident/linearised_fit.h"
+#include "ident/discover/linearised_fit.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,9 +9,9 @@
 #include <Eigen/Eigenvalues>
 #include <glog/logging.h>
 
+#include "ident/discover/residual_analysis.h"
 #include "ident/free_parameters.h"
-#include "ident/output_error_costs.h"
-#include "ident/residual_analysis.h"
+#include "ident/output_error/costs.h"
 
 namespace coaxid {
 namespace {

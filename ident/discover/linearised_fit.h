@@ -3,7 +3,7 @@
 // instead of one nonlinear refit per candidate).
 //
 // With r the noise-weighted residuals of the output-error problem
-// (output_error_costs.h: flight segments started from their fitted states,
+// (ident/output_error/costs.h: flight segments started from their fitted states,
 // their continuity ties, balance holds) and J = dr/d[s, theta] the Jacobian
 // w.r.t. every segment start state s and every free parameter of `vehicle`
 // (scaled, value / scale), this holds
@@ -27,7 +27,7 @@
 #include "dynamics/vehicle.h"
 #include "ident/estimation_log.h"
 #include "ident/noise_weights.h"
-#include "ident/output_error.h"
+#include "ident/output_error/output_error.h"
 
 namespace coaxid {
 

@@ -1,4 +1,4 @@
-#include "ident/residual_analysis.h"
+#include "ident/discover/residual_analysis.h"
 
 #include <algorithm>
 #include <cmath>

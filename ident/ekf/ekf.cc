@@ -1,4 +1,4 @@
-#include "ident/ekf.h"
+#include "ident/ekf/ekf.h"
 
 #include <algorithm>
 #include <chrono>
@@ -12,8 +12,8 @@
 
 #include "core/errors.h"
 #include "dynamics/outputs.h"
+#include "ident/ekf/rts_smoother.h"
 #include "ident/free_parameters.h"
-#include "ident/rts_smoother.h"
 
 namespace coaxid {
 namespace {

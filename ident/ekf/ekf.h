@@ -2,14 +2,14 @@
 // from flight logs: the recursive estimator for long logs and online use, and
 // a second opinion on output-error (issue 5).
 //
-// Model (ident/ekf_model.h): continuous-discrete EKF on z = [x; p], p the
+// Model (ident/ekf/model.h): continuous-discrete EKF on z = [x; p], p the
 // free parameters in scaled coordinates (value / scale) as random walks (the
 // paper's eq. 66 with the nonlinear 6-DoF model):
 //   xdot = f(x, theta(p), u) + w_x,  pdot = w_p,  E[w w^T] = diag(q_x, q_p) delta,
 //   y_k = h(x_k, theta(p), u_k) + v_k,  E[v v^T] = R = diag(noise std^2).
 // Per log row k >= 1:
 //   predict  CVODE over the zero-order-hold interval [t_{k-1}, t_k) with input
-//            u_{k-1}; P <- Phi P Phi^T + Qd (Phi, Qd: ekf_model.h);
+//            u_{k-1}; P <- Phi P Phi^T + Qd (Phi, Qd: ekf/model.h);
 //   update   with the channels row k holds (NaN skipped, so channels may have
 //            different rates and rows may be irregular): innovation
 //            nu = y - h(x, theta, u_k) (angles wrapped to (-pi, pi]),
@@ -29,7 +29,7 @@
 // d at its config value and says so; the others are then estimates relative
 // to that d (the ratios are reported with their std). ScaleAnchor::kNone
 // augments them all: the filter then finds the undetermined direction in its
-// final covariance (ekf_identifiability.h), reports it, and marks the
+// final covariance (ekf/identifiability.h), reports it, and marks the
 // parameters along it as not separately identifiable (no std is invented).
 //
 // Two passes (EkfOptions::covariance_pass, default on):
@@ -60,7 +60,7 @@
 // values equal the final filtered ones up to their random walk: they are not
 // kept.)
 //
-// Cost (bench/ekf_bench.cc, 60 s at 200 Hz, 12 unknowns augmented): per
+// Cost (bench/ident/ekf/ekf_bench.cc, 60 s at 200 Hz, 12 unknowns augmented): per
 // 5 ms row ~14 us propagation (CVODE restarted at the input change, ~5
 // steps; one autodiff Jacobian; the exponential series) and ~8 us update
 // (autodiff of the accelerometer, Cholesky, Joseph form), per pass; the
@@ -86,8 +86,8 @@
 #include "dynamics/integrator.h"
 #include "dynamics/state.h"
 #include "dynamics/vehicle.h"
-#include "ident/ekf_identifiability.h"
-#include "ident/ekf_model.h"
+#include "ident/ekf/identifiability.h"
+#include "ident/ekf/model.h"
 #include "ident/estimation_log.h"
 #include "ident/noise_weights.h"
 
@@ -101,7 +101,7 @@ struct EkfOptions {
   // sensor noise per sample; the kinematic rows (positions, angles) are exact.
   // On simulated flights (no process noise in the truth) they keep the
   // normalised innovations inside their 95 % band and every parameter within
-  // 2.4 std of the truth over nine seeds (tests/ident/ekf_test.cc); real
+  // 2.4 std of the truth over nine seeds (tests/ident/ekf/ekf_test.cc); real
   // logs with model error need larger values (watch the NIS in the report).
   std::array<double, kNumStates> state_psd = {1e-8, 1e-8, 1e-8, 1e-5, 1e-5, 1e-5,
                                               1e-8, 1e-8, 1e-8, 1e-5, 1e-5, 1e-5};
@@ -227,7 +227,7 @@ struct EkfResult {
   bool covariance_pass = false;
   std::string estimates_from;              // in words, for the report
 
-  // Identifiability (ekf_identifiability.h).
+  // Identifiability (ekf/identifiability.h).
   ScaleDirection scale;
   std::string anchored;  // the parameter held to fix the scale ("d"), or empty
   std::vector<UndeterminedDirection> undetermined;

@@ -1,4 +1,4 @@
-#include "ident/ekf_identifiability.h"
+#include "ident/ekf/identifiability.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 #include <glog/logging.h>
 
 #include "dynamics/model_jacobian.h"
-#include "ident/ekf_model.h"
+#include "ident/ekf/model.h"
 
 namespace coaxid {
 namespace {

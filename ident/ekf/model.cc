@@ -1,4 +1,4 @@
-#include "ident/ekf_model.h"
+#include "ident/ekf/model.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// The EKF's process and measurement models (ident/ekf.h): one hold interval's
+// The EKF's process and measurement models (ident/ekf/ekf.h): one hold interval's
 // transition of the augmented state and the flight outputs with their
 // Jacobian, all from the one templated model (STYLE.md, items 1 and 3).
 //
@@ -20,7 +20,7 @@
 //  - kSensitivities: CVODE on the state augmented with its variational
 //    equations (dynamics/variational_system.h, Jacobians by autodiff): A and
 //    B to the integrator's tolerance. Every right-hand side needs a Jacobian
-//    (~16 per 5 ms interval): 35 us per interval (bench/ekf_bench.cc).
+//    (~16 per 5 ms interval): 35 us per interval (bench/ident/ekf/ekf_bench.cc).
 //  - kLinearised (default): CVODE integrates the state alone; A and B are
 //    exp(Abar h) of the augmented Jacobian Abar = [[F, G], [0, 0]] taken once
 //    per sub-step at the midpoint state x_mid = (x(t0) + x(t1)) / 2 (one
@@ -29,7 +29,7 @@
 //    O(h^3 |dAbar/dt| |Abar|) (the midpoint rule is second order): below
 //    1e-5 of Phi's entries at h = 5 ms on the simulated flight, and the
 //    filter's estimates agree with kSensitivities' to 0.05 std
-//    (tests/ident/ekf_test.cc). The mean is CVODE's in both methods, so the
+//    (tests/ident/ekf/ekf_test.cc). The mean is CVODE's in both methods, so the
 //    cheaper Phi only changes the gain, to second order in h. The exponential is a Taylor series to 5th order with
 //    scaling and squaring (|F h| <= 1/4 after scaling: truncation < 1e-6 of a
 //    term that is itself a first-order-accurate linearisation).
@@ -46,7 +46,7 @@
 // angles via the rates), truncated at relative order (|F| h)^3 / 24 < 1e-3
 // (|F| h <= 1/4 after the same scaling and squaring, Qd(2h) = Phi(h) Qd(h)
 // Phi(h)^T + Qd(h)); checked against Van Loan's matrix exponential in
-// tests/ident/ekf_test.cc. A plain trapezoidal rule, h/2 (Phi Qc Phi^T + Qc),
+// tests/ident/ekf/ekf_test.cc. A plain trapezoidal rule, h/2 (Phi Qc Phi^T + Qc),
 // was tried first: it gets the parameter-driven term M h^3/3 wrong by half
 // (the yaw rate's process noise, driven by gamma1 / Izz, by 12 % at 30 ms).
 // With kSensitivities, Phi comes from CVODE and Qd from the same series at

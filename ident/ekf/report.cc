@@ -1,4 +1,4 @@
-#include "ident/ekf_report.h"
+#include "ident/ekf/report.h"
 
 #include <algorithm>
 #include <cmath>

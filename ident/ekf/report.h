@@ -24,7 +24,7 @@
 #include "core/statistics.h"
 #include "dynamics/integrator.h"
 #include "dynamics/vehicle.h"
-#include "ident/ekf.h"
+#include "ident/ekf/ekf.h"
 #include "ident/estimation_log.h"
 #include "ident/noise_weights.h"
 
@@ -38,7 +38,7 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
                                   const Eigen::MatrixXd& start_states, double window_s,
                                   const IntegratorOptions& integrator, int* failed_windows);
 
-// Per-channel fit errors of predictions: ChannelFitErrors of ident/output_error.h.
+// Per-channel fit errors of predictions: ChannelFitErrors of ident/output_error/output_error.h.
 
 struct EkfReportContext {
   std::vector<std::string> logs;             // estimation logs as given

@@ -1,4 +1,4 @@
-#include "ident/rts_smoother.h"
+#include "ident/ekf/rts_smoother.h"
 
 #include <Eigen/Cholesky>
 #include <glog/logging.h>

@@ -1,4 +1,4 @@
-#include "ident/output_error_costs.h"
+#include "ident/output_error/costs.h"
 
 #include <chrono>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "ident/output_error_information.h"
+#include "ident/output_error/information.h"
 
 #include <algorithm>
 #include <array>

@@ -28,7 +28,7 @@
 #include <Eigen/Core>
 
 #include "ident/estimation_log.h"
-#include "ident/output_error_costs.h"
+#include "ident/output_error/costs.h"
 
 namespace coaxid {
 

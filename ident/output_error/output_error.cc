@@ -1,4 +1,4 @@
-#include "ident/output_error.h"
+#include "ident/output_error/output_error.h"
 
 #include <algorithm>
 #include <chrono>
@@ -12,8 +12,8 @@
 #include "core/errors.h"
 #include "dynamics/outputs.h"
 #include "ident/free_parameters.h"
-#include "ident/output_error_costs.h"
-#include "ident/output_error_information.h"
+#include "ident/output_error/costs.h"
+#include "ident/output_error/information.h"
 
 namespace coaxid {
 

@@ -51,7 +51,7 @@ struct OutputErrorOptions {
   // > 0: Huber loss on the output residuals at this many std (robust fit).
   double huber_threshold = 0;
   // Correct the Cramér-Rao bounds for autocorrelated output residuals
-  // (Morelli & Klein; ident/output_error_information.h), summing the
+  // (Morelli & Klein; ident/output_error/information.h), summing the
   // residual correlation up to coloured_max_lag samples at most.
   bool coloured_residual_correction = false;
   int coloured_max_lag = 200;

@@ -10,7 +10,7 @@
 #include "dynamics/rk4.h"
 #include "dynamics/trim.h"
 #include "dynamics/vehicle.h"
-#include "experiments/simulate_experiment.h"
+#include "experiments/simulation/simulate_experiment.h"
 
 namespace coaxid {
 namespace {

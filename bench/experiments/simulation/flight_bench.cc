@@ -9,7 +9,7 @@
 
 #include "dynamics/simulator.h"
 #include "dynamics/trim.h"
-#include "experiments/simulate_experiment.h"
+#include "experiments/simulation/simulate_experiment.h"
 
 namespace coaxid {
 namespace {

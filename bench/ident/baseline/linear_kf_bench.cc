@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "dynamics/vehicle.h"
-#include "experiments/simulate_experiment.h"
-#include "ident/linear_baseline.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "ident/baseline/linear_baseline.h"
 
 namespace coaxid {
 namespace {

@@ -1,11 +1,11 @@
-// A full `discover` run (ident/discovery.h) on the shipped 60 s, 200 Hz flight
+// A full `discover` run (ident/discover/discovery.h) on the shipped 60 s, 200 Hz flight
 // log plus the balance log, every library effect as a candidate (issue 6
 // target: under 30 s on this machine). Reports the effects added, the time,
 // and how much of it the declared model's fit takes.
 #include <benchmark/benchmark.h>
 
-#include "experiments/simulate_experiment.h"
-#include "ident/discovery.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "ident/discover/discovery.h"
 
 namespace coaxid {
 namespace {

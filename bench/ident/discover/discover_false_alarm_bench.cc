@@ -11,9 +11,9 @@
 
 #include <benchmark/benchmark.h>
 
-#include "experiments/scenario.h"
-#include "experiments/simulate_experiment.h"
-#include "ident/discovery.h"
+#include "experiments/simulation/scenario.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "ident/discover/discovery.h"
 
 namespace coaxid {
 namespace {

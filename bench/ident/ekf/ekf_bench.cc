@@ -1,4 +1,4 @@
-// The EKF of ident/ekf.h on a 60 s, 200 Hz simulated flight log (12,000
+// The EKF of ident/ekf/ekf.h on a 60 s, 200 Hz simulated flight log (12,000
 // rows, 15 channels) with every unknown parameter augmented (issue 5 target:
 // under 1 s): d held by the default scale anchor (11 augmented, n = 23) and
 // all 12 augmented (n = 24); with and without the RTS smoother; the default
@@ -8,9 +8,9 @@
 // pass + backward pass).
 #include <benchmark/benchmark.h>
 
-#include "experiments/scenario.h"
-#include "experiments/simulate_experiment.h"
-#include "ident/ekf.h"
+#include "experiments/simulation/scenario.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "ident/ekf/ekf.h"
 
 namespace coaxid {
 namespace {

@@ -9,10 +9,10 @@
 
 #include <benchmark/benchmark.h>
 
-#include "experiments/simulate_experiment.h"
+#include "experiments/simulation/simulate_experiment.h"
 #include "ident/free_parameters.h"
-#include "ident/output_error.h"
-#include "ident/output_error_costs.h"
+#include "ident/output_error/costs.h"
+#include "ident/output_error/output_error.h"
 
 namespace coaxid {
 namespace {

@@ -15,8 +15,7 @@
 #include <string>
 
 #include "core/atomic_file.h"
-#include "experiments/demo_report.h"
-#include "experiments/markdown_html.h"
+#include "experiments/reports/demo_report.h"
 #include "tests/cli_test_dir.h"
 #include "tests/run_coaxid.h"
 
@@ -250,25 +249,6 @@ TEST_F(CompareCliTest, BadInputExitsTwoAndWritesNothing) {
   for (const fs::directory_entry& e : fs::directory_iterator(dir_)) {
     EXPECT_EQ(e.path().filename().string().find("compare-partial"), std::string::npos) << e.path();
   }
-}
-
-TEST(MarkdownToHtml, RendersTheReportsMarkdownAsOnePage) {
-  const std::string html = MarkdownToHtml(
-      "# Title <1>\n\nSome **bold** and `code` text\ncontinued.\n\n"
-      "| a | b |\n|---|---|\n| 1 | x < y |\n\n- one\n- [two](t.md)\n\n![a plot](plots/p.png)\n",
-      "T");
-  EXPECT_TRUE(Contains(html, "<!DOCTYPE html>"));
-  EXPECT_TRUE(Contains(html, "<title>T</title>"));
-  EXPECT_TRUE(Contains(html, "<h1>Title &lt;1&gt;</h1>"));
-  EXPECT_TRUE(Contains(html,
-                       "<p>Some <strong>bold</strong> and <code>code</code> text "
-                       "continued.</p>"));
-  EXPECT_TRUE(Contains(html, "<tr><th>a</th><th>b</th></tr>"));
-  EXPECT_TRUE(Contains(html, "<tr><td>1</td><td>x &lt; y</td></tr>"));
-  EXPECT_TRUE(Contains(html, "<li><a href=\"t.md\">two</a></li>"));
-  EXPECT_TRUE(Contains(html, "<img src=\"plots/p.png\" alt=\"a plot\">"));
-  EXPECT_FALSE(Contains(html, "|---|"));
-  EXPECT_FALSE(Contains(html, "<script"));  // self-contained, nothing fetched
 }
 
 }  // namespace

@@ -15,8 +15,8 @@
 
 #include "core/atomic_file.h"
 #include "core/plot.h"
-#include "tests/ident/balance_test_util.h"
 #include "tests/cli_test_dir.h"
+#include "tests/ident/baseline/balance_test_util.h"
 #include "tests/run_coaxid.h"
 
 namespace coaxid {

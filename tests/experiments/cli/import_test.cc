@@ -1,8 +1,8 @@
-// `coaxid import` (experiments/import_command.h): unit conversion and sign
+// `coaxid import` (experiments/cli/import.h): unit conversion and sign
 // conventions of the tmotor28 format, error messages on malformed input, and
 // that the shipped logs in data/real/tmotor28-coaxial/ are a fresh conversion
 // of the upstream files.
-#include "experiments/import_command.h"
+#include "experiments/cli/import.h"
 
 #include <cmath>
 #include <filesystem>

@@ -7,7 +7,7 @@
 
 #include "core/statistics.h"
 #include "dynamics/trim.h"
-#include "experiments/simulate_experiment.h"
+#include "experiments/simulation/simulate_experiment.h"
 
 namespace coaxid {
 namespace {

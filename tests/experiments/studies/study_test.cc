@@ -21,9 +21,9 @@
 
 #include "core/atomic_file.h"
 #include "core/errors.h"
-#include "experiments/study_points.h"
-#include "experiments/study_spec.h"
-#include "experiments/study_summary.h"
+#include "experiments/studies/points.h"
+#include "experiments/studies/spec.h"
+#include "experiments/studies/summary.h"
 #include "tests/run_coaxid.h"
 
 namespace coaxid {

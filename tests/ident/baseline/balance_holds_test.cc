@@ -1,5 +1,5 @@
 // Segmentation of balance logs into constant-input holds.
-#include "ident/balance_holds.h"
+#include "ident/baseline/balance_holds.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <limits>
 
 #include "core/errors.h"
-#include "tests/ident/balance_test_util.h"
+#include "tests/ident/baseline/balance_test_util.h"
 
 namespace coaxid {
 namespace {

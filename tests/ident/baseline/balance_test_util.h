@@ -11,9 +11,9 @@
 
 #include "core/log.h"
 #include "dynamics/vehicle.h"
-#include "experiments/scenario.h"
-#include "experiments/simulate_experiment.h"
-#include "ident/linear_baseline.h"
+#include "experiments/simulation/scenario.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "ident/baseline/linear_baseline.h"
 
 namespace coaxid {
 namespace testing_util {

@@ -3,7 +3,7 @@
 // sigma): exact on noise-free data, estimates within 3 std of the truth at
 // the paper's noise level, stds that shrink as data grow and that match the
 // spread over seeds.
-#include "ident/linear_baseline.h"
+#include "ident/baseline/linear_baseline.h"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "tests/ident/balance_test_util.h"
+#include "tests/ident/baseline/balance_test_util.h"
 
 namespace coaxid {
 namespace {

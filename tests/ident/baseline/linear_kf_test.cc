@@ -1,7 +1,7 @@
 // The regressors of eq. 70 and the Kalman recursion (eqs. 80-82) against two
 // independent routes: the nonlinear model of dynamics/ (for the regressors)
 // and the batch least-squares solution by QR (for the filter).
-#include "ident/linear_kf.h"
+#include "ident/baseline/linear_kf.h"
 
 #include <gtest/gtest.h>
 
@@ -10,9 +10,9 @@
 #include <random>
 
 #include "dynamics/interference_loss.h"
-#include "ident/noise_covariance.h"
-#include "ident/thrust_map.h"
-#include "tests/ident/balance_test_util.h"
+#include "ident/baseline/noise_covariance.h"
+#include "ident/baseline/thrust_map.h"
+#include "tests/ident/baseline/balance_test_util.h"
 
 namespace coaxid {
 namespace {

@@ -2,14 +2,14 @@
 // accepts the paper's experiment and refuses, naming the condition and the
 // inputs, logs with the rotors always at equal speed or without swashplate
 // motion.
-#include "ident/excitation.h"
+#include "ident/baseline/persistent_excitation.h"
 
 #include <gtest/gtest.h>
 
 #include <string>
 
 #include "core/errors.h"
-#include "tests/ident/balance_test_util.h"
+#include "tests/ident/baseline/balance_test_util.h"
 
 namespace coaxid {
 namespace {

@@ -1,5 +1,5 @@
 // The thrust map and the sigma map (paper Figs. 8-9).
-#include "ident/thrust_map.h"
+#include "ident/baseline/thrust_map.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 
 #include "core/errors.h"
 #include "dynamics/interference_loss.h"
-#include "tests/ident/balance_test_util.h"
+#include "tests/ident/baseline/balance_test_util.h"
 
 namespace coaxid {
 namespace {

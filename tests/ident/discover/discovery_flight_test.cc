@@ -1,4 +1,4 @@
-// The closing loop (ident/discovery.h) on short simulated closed-loop flights
+// The closing loop (ident/discover/discovery.h) on short simulated closed-loop flights
 // (issue 6, Tests): for every library effect a flight can show, a log with
 // that effect in the truth and not in the declared model: discover adds it
 // and only it, the held-out error of the channels it drives falls clearly,
@@ -8,7 +8,7 @@
 // the library: nothing wrong added, its channel reported unexplained, with a
 // generic-dictionary candidate.
 //
-// wake_interference is tested on balance logs (discover_test.cc, with
+// wake_interference is tested on balance logs (discovery_test.cc, with
 // cg_offset, found in both): a flight measures only the total thrust and yaw
 // moment, where k_T omega1 omega2 and k_Q omega1 omega2 look like the loss
 // factor sigma at the near-equal rotor speeds of hover; only the balance's
@@ -24,8 +24,8 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/discovery.h"
-#include "tests/ident/discover_test_util.h"
+#include "ident/discover/discovery.h"
+#include "tests/ident/discover/discovery_test_util.h"
 
 namespace coaxid {
 namespace {

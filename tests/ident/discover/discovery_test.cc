@@ -1,4 +1,4 @@
-// The closing loop (ident/discovery.h) on simulated balance logs, whose static
+// The closing loop (ident/discover/discovery.h) on simulated balance logs, whose static
 // model fits in milliseconds: an undeclared library effect in the truth is
 // found and only it; no undeclared effect, nothing is added (over seeds); an
 // effect outside the library is not mistaken for one and its channel is
@@ -12,11 +12,11 @@
 #include <gtest/gtest.h>
 
 #include "dynamics/outputs.h"
-#include "experiments/scenario.h"
-#include "experiments/simulate_experiment.h"
-#include "ident/discovery.h"
-#include "ident/residual_analysis.h"
-#include "tests/ident/discover_test_util.h"
+#include "experiments/simulation/scenario.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "ident/discover/discovery.h"
+#include "ident/discover/residual_analysis.h"
+#include "tests/ident/discover/discovery_test_util.h"
 
 namespace coaxid {
 namespace {

@@ -1,5 +1,5 @@
-// Shared pieces of the closing-loop tests (discover_test.cc on balance logs,
-// discover_flight_test.cc on flight logs): the nominal (declared) vehicle, a
+// Shared pieces of the closing-loop tests (discovery_test.cc on balance logs,
+// discovery_flight_test.cc on flight logs): the nominal (declared) vehicle, a
 // truth with chosen effects, and the 3-std check of an added parameter.
 #pragma once
 
@@ -10,9 +10,9 @@
 
 #include <gtest/gtest.h>
 
-#include "experiments/scenario.h"
-#include "experiments/simulate_experiment.h"
-#include "ident/discovery.h"
+#include "experiments/simulation/scenario.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "ident/discover/discovery.h"
 
 namespace coaxid {
 

@@ -1,7 +1,7 @@
-// Step 7's generic dictionary (ident/generic_dictionary.h): FROLS recovers the
+// Step 7's generic dictionary (ident/discover/generic_dictionary.h): FROLS recovers the
 // terms a synthetic residual was built from, with their coefficients, and
 // offers nothing on white noise.
-#include "ident/generic_dictionary.h"
+#include "ident/discover/generic_dictionary.h"
 
 #include <algorithm>
 #include <random>

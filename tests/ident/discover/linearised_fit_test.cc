@@ -1,8 +1,8 @@
-// The candidate tests of ident/linearised_fit.h on a linear regression whose
+// The candidate tests of ident/discover/linearised_fit.h on a linear regression whose
 // answer is known: the score statistic against the closed form, and the
 // cluster-robust test's level on autocorrelated residuals (where the
 // white-noise test over-rejects) and its power.
-#include "ident/linearised_fit.h"
+#include "ident/discover/linearised_fit.h"
 
 #include <cmath>
 #include <random>

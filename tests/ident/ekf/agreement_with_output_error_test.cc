@@ -5,9 +5,9 @@
 
 #include <gtest/gtest.h>
 
-#include "experiments/simulate_experiment.h"
-#include "ident/ekf.h"
-#include "ident/output_error.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "ident/ekf/ekf.h"
+#include "ident/output_error/output_error.h"
 
 namespace coaxid {
 namespace {

@@ -1,4 +1,4 @@
-// The EKF (ident/ekf.h) on seeded simulated flight logs: the closed-loop
+// The EKF (ident/ekf/ekf.h) on seeded simulated flight logs: the closed-loop
 // flight of configs/scenarios/flight.yaml (truth differs from the config's
 // nominal values by up to 30 %), replayed to get the true states.
 //
@@ -12,7 +12,7 @@
 // The measurement noise given to the filter is the simulation's own, so that
 // these tests check the filter and not the noise estimate (the CLI test and
 // the noise-adaptation test cover that).
-#include "ident/ekf.h"
+#include "ident/ekf/ekf.h"
 
 #include <gtest/gtest.h>
 
@@ -27,8 +27,8 @@
 #include "dynamics/effects/effect_library.h"
 #include "dynamics/model_jacobian.h"
 #include "dynamics/trim.h"
-#include "experiments/scenario.h"
-#include "experiments/simulate_experiment.h"
+#include "experiments/simulation/scenario.h"
+#include "experiments/simulation/simulate_experiment.h"
 
 namespace coaxid {
 namespace {

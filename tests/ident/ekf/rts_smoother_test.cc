@@ -1,10 +1,10 @@
-// The RTS smoother (ident/rts_smoother.h) against the closed-form answer: for
+// The RTS smoother (ident/ekf/rts_smoother.h) against the closed-form answer: for
 // a linear Gaussian model the smoothed means and covariances are the solution
 // and inverse information of the batch least-squares problem over every state
 // at once (prior, dynamics and measurement residuals, each whitened).
 // Both are computed in double precision on a well-conditioned 2-state problem
 // of 40 steps; they agree to round-off (1e-9 relative is generous).
-#include "ident/rts_smoother.h"
+#include "ident/ekf/rts_smoother.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // The output-error residual blocks' simulation cache and the block-wise
 // marginal information, against plain recomputation.
-#include "ident/output_error_information.h"
+#include "ident/output_error/information.h"
 
 #include <cmath>
 #include <memory>
@@ -8,10 +8,10 @@
 #include <ceres/ceres.h>
 #include <gtest/gtest.h>
 
-#include "experiments/simulate_experiment.h"
+#include "experiments/simulation/simulate_experiment.h"
 #include "ident/free_parameters.h"
-#include "ident/output_error.h"
-#include "ident/output_error_costs.h"
+#include "ident/output_error/costs.h"
+#include "ident/output_error/output_error.h"
 
 namespace coaxid {
 namespace {

@@ -1,5 +1,5 @@
 // Output-error estimation against the truth it was simulated from.
-#include "ident/output_error.h"
+#include "ident/output_error/output_error.h"
 
 #include <cmath>
 #include <random>
@@ -7,9 +7,9 @@
 #include <gtest/gtest.h>
 
 #include "dynamics/outputs.h"
-#include "experiments/simulate_experiment.h"
+#include "experiments/simulation/simulate_experiment.h"
 #include "ident/free_parameters.h"
-#include "ident/output_error_costs.h"
+#include "ident/output_error/costs.h"
 
 namespace coaxid {
 namespace {
