@@ -13,6 +13,7 @@
 #include "core/log.h"
 #include "core/plot.h"
 #include "core/report.h"
+#include "core/stopwatch.h"
 #include "core/vehicle_config.h"
 #include "experiments/cli/cli.h"
 #include "experiments/cli/flag_checks.h"
@@ -30,10 +31,6 @@ using Clock = std::chrono::steady_clock;
 constexpr const char* kCompareUsage =
     "usage: coaxid compare --logs=A.csv[,B.csv...] --config=F --out=DIR [--validate=C.csv,...] "
     "[--holdout_fraction=0.2] [--truth=T.json]";
-
-double Since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 std::string Join(const std::vector<std::string>& parts) {
   std::string out;
@@ -146,7 +143,7 @@ json Compare(const CompareRequest& request) {
         continue;
       }
       std::fprintf(stderr, "compare: [%d/3] %s on %zu log(s) (elapsed %.1f s) ...\n", ++done,
-                   run.method.c_str(), run.logs.size(), Since(start));
+                   run.method.c_str(), run.logs.size(), SecondsSince(start));
       IdentifyRun identify;
       identify.method = run.method;
       identify.logs = Join(run.logs);
@@ -167,7 +164,7 @@ json Compare(const CompareRequest& request) {
       } catch (const InputError& e) {
         throw InputError(run.method + ": " + e.what());
       }
-      run.wall_s = Since(t0);
+      run.wall_s = SecondsSince(t0);
       std::fprintf(stderr, "compare: %s %s in %.2f s\n", run.method.c_str(), run.status.c_str(),
                    run.wall_s);
     }
@@ -202,7 +199,7 @@ json Compare(const CompareRequest& request) {
     throw;
   }
   if (request.print_table) std::cout << markdown;
-  std::fprintf(stderr, "compare: done in %.1f s -> %s/compare.md\n", Since(start),
+  std::fprintf(stderr, "compare: done in %.1f s -> %s/compare.md\n", SecondsSince(start),
                request.out.c_str());
   return comparison;
 }

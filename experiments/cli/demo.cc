@@ -10,6 +10,7 @@
 #include "core/log.h"
 #include "core/report.h"
 #include "core/report_values.h"
+#include "core/stopwatch.h"
 #include "dynamics/vehicle.h"
 #include "experiments/cli/compare.h"
 #include "experiments/cli/discover.h"
@@ -28,15 +29,10 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-double Since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
 // The logs the demo simulates and the project ships (data/glmav/NAME.csv),
 // each from configs/scenarios/NAME.yaml with configs/glmav.yaml.
 const char* const kDemoScenarios[] = {"balance", "balance_points", "flight", "flight_3211",
                                       "balance_wake"};
-
 
 // "identical to the shipped log", or how it differs, or that there is none.
 std::string ReproducedText(const Log& log, const std::string& shipped_path) {
@@ -97,8 +93,9 @@ int RunDemo() {
     const Log log = ReadLog(out + "/" + entry.log);
     entry.rows = log.NumRows();
     entry.duration_s = log.Column("t").back() - log.Column("t").front();
-    const double elapsed = Since(t0);
-    std::fprintf(stderr, "%d rows in %.2f s (elapsed %.1f s)\n", entry.rows, elapsed, Since(start));
+    const double elapsed = SecondsSince(t0);
+    std::fprintf(stderr, "%d rows in %.2f s (elapsed %.1f s)\n", entry.rows, elapsed,
+                 SecondsSince(start));
     const std::string shipped = root + "/data/glmav/" + s.name + ".csv";
     entry.reproduced = ReproducedText(log, shipped);
     record.simulated.push_back(entry);
@@ -110,12 +107,12 @@ int RunDemo() {
                                {"reproduced", entry.reproduced},
                                {"summary", SummarizeLog(log)}});
   }
-  record.step_seconds.push_back({"1. simulate the shipped scenarios", Since(start)});
+  record.step_seconds.push_back({"1. simulate the shipped scenarios", SecondsSince(start)});
 
   // 2-5. The three estimators on the shipped logs, compared against the truth.
   const Clock::time_point compare_start = Clock::now();
   std::fprintf(stderr, "demo: compare linear_kf, output_error, ekf (elapsed %.1f s)\n",
-               Since(start));
+               SecondsSince(start));
   CompareRequest compare;
   compare.logs = root + "/data/glmav/flight.csv," + root + "/data/glmav/balance.csv";
   compare.config = config_path;
@@ -132,7 +129,7 @@ int RunDemo() {
     const double wall_s = m["wall_s"].is_number() ? m["wall_s"].get<double>() : 0.0;
     record.step_seconds.push_back({"identify --method=" + m["method"].get<std::string>(), wall_s});
   }
-  record.step_seconds.push_back({"compare, in all", Since(compare_start)});
+  record.step_seconds.push_back({"compare, in all", SecondsSince(compare_start)});
   summary["compare"] = record.comparison;
 
   // 6. The closing loop: a simulated log with an effect the config does not
@@ -157,7 +154,7 @@ int RunDemo() {
   summary["discoveries"] = json::object();
   for (const Discovery& d : discoveries) {
     std::fprintf(stderr, "demo: discover on the %s (elapsed %.1f s)\n", d.title.c_str(),
-                 Since(start));
+                 SecondsSince(start));
     const Clock::time_point t0 = Clock::now();
     std::string logs;
     for (const std::string& l : d.logs) logs += (logs.empty() ? "" : ",") + l;
@@ -178,10 +175,10 @@ int RunDemo() {
     summary["discoveries"][d.folder] = {{"added", entry.discovery["added"]},
                                         {"unexplained", entry.discovery["unexplained"]}};
     record.discoveries.push_back(entry);
-    record.step_seconds.push_back({std::string("discover: ") + d.folder, Since(t0)});
+    record.step_seconds.push_back({std::string("discover: ") + d.folder, SecondsSince(t0)});
   }
 
-  record.total_s = Since(start);
+  record.total_s = SecondsSince(start);
   summary["seconds"] = record.total_s;
   const std::string markdown = DemoReportMarkdown(record);
   WriteFileAtomically(out + "/report.md", markdown);

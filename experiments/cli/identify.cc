@@ -15,6 +15,7 @@
 #include "core/errors.h"
 #include "core/plot.h"
 #include "core/report.h"
+#include "core/stopwatch.h"
 #include "dynamics/vehicle.h"
 #include "experiments/cli/cli.h"
 #include "experiments/cli/flag_checks.h"
@@ -29,10 +30,6 @@ namespace coaxid {
 namespace {
 
 namespace fs = std::filesystem;
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 constexpr const char* kLinearKfUsage =
     "usage: coaxid identify --method=linear_kf --logs=A.csv[,B.csv] --config=F --out=DIR "
@@ -206,7 +203,7 @@ nlohmann::json IdentifyLinearKf(const IdentifyRun& run) {
   const auto t0 = std::chrono::steady_clock::now();
   const LinearBaselineResult result =
       RunLinearBaseline(vehicle.parameters, estimation, validation, options);
-  std::fprintf(stderr, "identify: estimated in %.3f s (%d Kalman updates)\n", Seconds(t0),
+  std::fprintf(stderr, "identify: estimated in %.3f s (%d Kalman updates)\n", SecondsSince(t0),
                result.kf.updates);
 
   // Everything is known: only now write.
@@ -264,7 +261,7 @@ nlohmann::json IdentifyLinearKf(const IdentifyRun& run) {
   const nlohmann::json report = LinearBaselineReportJson(result, vehicle.parameters, context);
   WriteJson(dir + "/report.json", report);
   if (run.print_estimates) PrintEstimates(result);
-  std::fprintf(stderr, "identify: done in %.2f s -> %s/report.json%s\n", Seconds(start),
+  std::fprintf(stderr, "identify: done in %.2f s -> %s/report.json%s\n", SecondsSince(start),
                dir.c_str(), plot_error.empty() ? "" : " (plots skipped)");
   return report;
 }

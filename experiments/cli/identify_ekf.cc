@@ -13,6 +13,7 @@
 #include "core/errors.h"
 #include "core/plot.h"
 #include "core/report.h"
+#include "core/stopwatch.h"
 #include "dynamics/vehicle.h"
 #include "experiments/cli/cli.h"
 #include "experiments/cli/estimation_io.h"
@@ -29,10 +30,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-double Since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 constexpr const char* kUsage =
     "usage: coaxid identify --method=ekf --logs=A.csv[,B.csv] --config=F --out=DIR "
@@ -216,7 +213,7 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
     if (done == last_report) return;
     last_report = done;
     std::fprintf(stderr, "identify: ekf: %ld / %ld rows (%.0f %%), %.2f s\n", done, total,
-                 100.0 * done / std::max(1L, total), Since(filter_start));
+                 100.0 * done / std::max(1L, total), SecondsSince(filter_start));
   };
   std::fprintf(stderr, "identify: ekf on %zu log part(s), %zu free parameter(s): %d noise "
                "adaptation pass(es), estimation pass%s ...\n",
@@ -310,7 +307,7 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   const nlohmann::json report = EkfReportJson(result, options, initial, context);
   WriteJson(dir + "/report.json", report);
   if (run.print_estimates) PrintEstimates(result);
-  std::fprintf(stderr, "identify: ekf: done in %.2f s -> %s/report.json%s\n", Since(start),
+  std::fprintf(stderr, "identify: ekf: done in %.2f s -> %s/report.json%s\n", SecondsSince(start),
                dir.c_str(), plot_error.empty() ? "" : " (plots skipped)");
   return report;
 }

@@ -11,6 +11,7 @@
 #include "core/errors.h"
 #include "core/plot.h"
 #include "core/report.h"
+#include "core/stopwatch.h"
 #include "dynamics/vehicle.h"
 #include "experiments/cli/cli.h"
 #include "experiments/cli/estimation_io.h"
@@ -40,10 +41,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-double Since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 constexpr const char* kOutputErrorUsage =
     "usage: coaxid identify --method=output_error --logs=A.csv[,B.csv] --config=F --out=DIR "
@@ -249,7 +246,8 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
   WriteJson(dir + "/report.json", report);
 
   if (run.print_estimates) PrintEstimates(result);
-  std::fprintf(stderr, "identify: done in %.1f s -> %s/report.json\n", Since(start), dir.c_str());
+  std::fprintf(stderr, "identify: done in %.1f s -> %s/report.json\n", SecondsSince(start),
+               dir.c_str());
   return report;
 }
 

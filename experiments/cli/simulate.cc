@@ -5,6 +5,7 @@
 
 #include "core/log.h"
 #include "core/report.h"
+#include "core/stopwatch.h"
 #include "core/vehicle_config.h"
 #include "dynamics/vehicle.h"
 #include "experiments/cli/cli.h"
@@ -14,13 +15,6 @@
 #include "experiments/simulation/simulate_experiment.h"
 
 namespace coaxid {
-namespace {
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-}  // namespace
 
 int RunSimulate() {
   RequireFlag(FLAGS_config, "config", kCliUsage);
@@ -37,7 +31,7 @@ int RunSimulate() {
   if (!FLAGS_truth.empty()) WriteJson(FLAGS_truth, TruthJson(truth));
   std::fprintf(stderr, "simulate: %s log, %d rows, %.2f s simulated in %.3f s -> %s\n",
                LogKindName(log.kind), log.NumRows(),
-               log.Column("t").back() - log.Column("t").front(), Seconds(start),
+               log.Column("t").back() - log.Column("t").front(), SecondsSince(start),
                FLAGS_out.c_str());
   return 0;
 }

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <thread>
 
+#include "core/stopwatch.h"
 #include "experiments/studies/run.h"
 
 namespace coaxid {
@@ -81,8 +82,7 @@ StudyRunnerResult RunStudyRuns(const StudySpec& spec, const std::vector<int>& pe
         out->Append(record);
         std::lock_guard<std::mutex> lock(mutex);
         ++done;
-        const double elapsed =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double elapsed = SecondsSince(start);
         const long left = limit - done;
         // One line per run, at most one a second for fast runs; always the last.
         if (elapsed - last_line < 1.0 && left > 0) continue;
@@ -108,7 +108,7 @@ StudyRunnerResult RunStudyRuns(const StudySpec& spec, const std::vector<int>& pe
   StudyRunnerResult result;
   result.done = done;
   result.interrupted = StudyStopRequested();
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = SecondsSince(start);
   return result;
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/errors.h"
+#include "core/stopwatch.h"
 #include "dynamics/effects/effect_library.h"
 #include "dynamics/model_jacobian.h"
 #include "dynamics/outputs.h"
@@ -93,10 +94,6 @@ std::vector<std::string> AllParameterNames(const std::vector<std::string>& effec
     for (const std::string& n : EffectParameterNames(e)) out.push_back(n);
   }
   return out;
-}
-
-double Seconds(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
 // Holm's step-down correction over the testable scores: the i-th smallest
@@ -227,7 +224,7 @@ CandidatePass LinearisePass(const Vehicle& fitted, const OutputErrorResult& fit,
                     &pass.linearised, &why)) {
     throw ComputationError("linearising the fit for the candidate tests: " + why);
   }
-  pass.seconds = Seconds(t0);
+  pass.seconds = SecondsSince(t0);
   return pass;
 }
 

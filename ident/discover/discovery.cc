@@ -8,6 +8,7 @@
 #include "core/errors.h"
 #include "core/report.h"
 #include "core/report_values.h"
+#include "core/stopwatch.h"
 
 namespace coaxid {
 namespace {
@@ -16,10 +17,6 @@ using Clock = std::chrono::steady_clock;
 
 void Say(const DiscoveryOptions& o, const std::string& line) {
   if (o.progress) o.progress(line);
-}
-
-double Seconds(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
 ModelSnapshot Snapshot(const Vehicle& vehicle, const OutputErrorResult& r,
@@ -161,7 +158,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
       for (CandidateScore& s : scores) {
         if (!s.passes) break;  // passing candidates come first, best first
         Say(options, "discover: confirming " + s.effect + " by a joint refit (" +
-                         NumberText(Seconds(start), "%.1f s") + " so far)");
+                         NumberText(SecondsSince(start), "%.1f s") + " so far)");
         CandidatePass next;
         if (ConfirmCandidate(pass, estimation, o.fit, options.alpha, &s, &next)) {
           Say(options, "discover: added " + s.effect + " (Wald p = " +
@@ -208,7 +205,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                                         options.dictionary);
     out.unexplained.push_back(u);
   }
-  out.seconds = Seconds(start);
+  out.seconds = SecondsSince(start);
   return out;
 }
 

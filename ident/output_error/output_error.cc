@@ -10,6 +10,7 @@
 #include <glog/logging.h>
 
 #include "core/errors.h"
+#include "core/stopwatch.h"
 #include "dynamics/outputs.h"
 #include "ident/free_parameters.h"
 #include "ident/output_error/costs.h"
@@ -43,9 +44,6 @@ bool OutputErrorOptions::IsValid(std::string* why) const {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double Since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 double MedianStep(const EstimationLog& log) {
   std::vector<double> dt;
@@ -73,7 +71,7 @@ class ProgressCallback : public ceres::IterationCallback {
     if (options_.progress) {
       char line[256];
       std::snprintf(line, sizeof line, "%s: iteration %2d  cost %.6e  |step| %.2e  elapsed %.1f s",
-                    stage_.c_str(), s.iteration, s.cost, s.step_norm, Since(start_));
+                    stage_.c_str(), s.iteration, s.cost, s.step_norm, SecondsSince(start_));
       options_.progress(line);
     }
     return ceres::SOLVER_CONTINUE;
@@ -423,7 +421,7 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
     ceres::Solver::Summary summary;
     const auto solve_start = Clock::now();
     ceres::Solve(solver_options, a.problem.get(), &summary);
-    integration_seconds += Since(solve_start);
+    integration_seconds += SecondsSince(solve_start);
     stage_timing.push_back({{"segment_s", segment_s},
                             {"iterations", summary.iterations.size() - 1},
                             {"residual_evaluations", summary.num_residual_evaluations},
@@ -478,12 +476,12 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
   result.segments = previous.segments;
   result.predictions = previous_predictions;
   result.usable = true;
-  result.seconds = Since(start);
+  result.seconds = SecondsSince(start);
   // Wall time by kind: trial-point evaluations (integration of the state),
   // Jacobian evaluations (integration with sensitivities and the output
   // Jacobians), linear algebra (Ceres' linear solves and the covariance), and
   // the rest (problem assembly, predictions, Ceres' bookkeeping).
-  double integration = 0, sensitivities = 0, linear_algebra = Since(covariance_start);
+  double integration = 0, sensitivities = 0, linear_algebra = SecondsSince(covariance_start);
   for (const nlohmann::json& s : stage_timing) {
     integration += s["residual_seconds"].get<double>();
     sensitivities += s["jacobian_seconds"].get<double>();
@@ -497,7 +495,7 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
         {"linear_algebra", linear_algebra},
         {"other", result.seconds - integration - sensitivities - linear_algebra}}},
       {"solves_seconds", integration_seconds},
-      {"covariance_seconds", Since(covariance_start)},
+      {"covariance_seconds", SecondsSince(covariance_start)},
       {"stages", stage_timing},
       // Summed over the threads that evaluate residual blocks at once.
       {"state_runs", times.state_runs.load()},
