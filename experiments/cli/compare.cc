@@ -30,7 +30,7 @@ using Clock = std::chrono::steady_clock;
 
 constexpr const char* kCompareUsage =
     "usage: coaxid compare --logs=A.csv[,B.csv...] --config=F --out=DIR [--validate=C.csv,...] "
-    "[--holdout_fraction=0.2] [--truth=T.json]";
+    "[--holdout_fraction=0.2] [--truth=T.json] [--prior=R.json[:name,...]]";
 
 std::string Join(const std::vector<std::string>& parts) {
   std::string out;
@@ -152,6 +152,14 @@ json Compare(const CompareRequest& request) {
       identify.out = (staging / run.method).string();
       identify.holdout_fraction = request.holdout_fraction;
       identify.print_estimates = false;
+      if (run.method != "linear_kf") identify.prior = request.prior;
+      const MethodRun& oe = runs[1];
+      if (run.method == "ekf" && request.prior.empty() && !balance.empty() &&
+          oe.status == "ran") {
+        // The balance fit's scale (model.md decision 8).
+        identify.prior = (staging / oe.folder / "report.json").string() + ":d";
+        run.prior = "d from output_error (balance + flight logs fix the scale)";
+      }
       run.folder = run.method;
       const Clock::time_point t0 = Clock::now();
       try {
@@ -206,8 +214,8 @@ json Compare(const CompareRequest& request) {
 
 int RunCompare() {
   const IdentifyRun flags = IdentifyRunFromFlags();
-  Compare(
-      {flags.logs, flags.validate, flags.config, flags.out, FLAGS_truth, flags.holdout_fraction});
+  Compare({flags.logs, flags.validate, flags.config, flags.out, FLAGS_truth,
+           flags.holdout_fraction, flags.prior});
   return 0;
 }
 

@@ -22,6 +22,11 @@ DEFINE_double(holdout_fraction, 0.2,
 DEFINE_double(process_noise, 0.0,
               "identify --method=linear_kf: Kalman process noise, Q = q diag(scale^2) per "
               "sample (the paper: 0)");
+DEFINE_string(prior, "",
+              "identify (output_error, ekf), discover: REPORT.json[:name,name...]: parameters "
+              "(value and std) from another report as Gaussian priors (output_error) or initial "
+              "value and covariance (ekf); without names every estimated parameter the report "
+              "gives a std. A prior on d (e.g. from a balance fit) fixes the scale of flight logs");
 
 // import (experiments/cli/import.h).
 DEFINE_string(format, "", "import: the rig's file format (tmotor28)");

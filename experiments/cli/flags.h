@@ -14,6 +14,7 @@ DECLARE_string(method);
 DECLARE_string(validate);
 DECLARE_double(holdout_fraction);
 DECLARE_double(process_noise);
+DECLARE_string(prior);
 // import (experiments/cli/import.h).
 DECLARE_string(format);
 DECLARE_string(in);

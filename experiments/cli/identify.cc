@@ -128,6 +128,7 @@ IdentifyRun IdentifyRunFromFlags() {
   run.config = FLAGS_config;
   run.out = FLAGS_out;
   run.holdout_fraction = FLAGS_holdout_fraction;
+  run.prior = FLAGS_prior;
   return run;
 }
 
@@ -136,6 +137,10 @@ nlohmann::json Identify(const IdentifyRun& run) {
   CheckMethod(run.method);
   if (run.method == "output_error") return IdentifyOutputError(run);
   if (run.method == "ekf") return IdentifyEkf(run);
+  if (!run.prior.empty()) {
+    throw InputError("--prior is for output_error and ekf; linear_kf takes d from the config "
+                     "(model.md decision 6)");
+  }
   return IdentifyLinearKf(run);
 }
 

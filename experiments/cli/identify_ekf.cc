@@ -19,6 +19,7 @@
 #include "experiments/cli/estimation_io.h"
 #include "experiments/cli/flag_checks.h"
 #include "experiments/cli/flags.h"
+#include "experiments/cli/prior_flag.h"
 #include "ident/ekf/ekf.h"
 #include "ident/ekf/report.h"
 #include "ident/estimation_log.h"
@@ -36,7 +37,7 @@ constexpr const char* kUsage =
     "[--validate=C.csv] [--holdout_fraction=0.2] [--smoother=true] "
     "[--ekf_scale_anchor=d|none] [--ekf_transition=linearised|sensitivities] "
     "[--ekf_covariance_pass=true] [--ekf_process_noise=1] [--ekf_window_s=1] "
-    "[--ekf_noise_adaptations=1] [--ekf_initial_report=R.json]";
+    "[--ekf_noise_adaptations=1] [--ekf_initial_report=R.json] [--prior=R.json[:name,...]]";
 
 std::vector<Log> ReadFlightLogs(const std::vector<std::string>& paths, const char* flag) {
   std::vector<Log> logs;
@@ -68,32 +69,18 @@ void MakeNamesUnique(std::vector<EstimationLog>* logs, std::set<std::string>* ta
 
 // Initial values and std from an earlier report.json.
 std::string ApplyInitialReport(const std::string& path, Vehicle* vehicle, EkfOptions* options) {
-  nlohmann::json report;
-  try {
-    report = nlohmann::json::parse(ReadFile(path));
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": not a JSON report (" + e.what() + ")");
-  }
-  if (!report.contains("parameters") || !report["parameters"].is_object()) {
-    throw InputError(path + ": no \"parameters\" object (cli-and-reports.md report.json)");
-  }
   int used = 0;
-  for (const auto& [name, entry] : report["parameters"].items()) {
-    const int i = vehicle->parameters.Index(name);
-    if (i < 0 || !vehicle->parameters[i].estimated || !entry.is_object()) continue;
-    if (!entry.contains("value") || !entry["value"].is_number()) continue;
-    const double value = entry["value"].get<double>();
+  for (const ReportedParameter& r : ReadReportedParameters(path)) {
+    const int i = vehicle->parameters.Index(r.name);
+    if (i < 0 || !vehicle->parameters[i].estimated) continue;
     const Parameter& p = vehicle->parameters[i];
-    if (!(std::isfinite(value) && value >= p.lower && value <= p.upper)) {
-      throw InputError(path + ": parameters." + name + ".value = " + std::to_string(value) +
+    if (!(std::isfinite(r.value) && r.value >= p.lower && r.value <= p.upper)) {
+      throw InputError(path + ": parameters." + r.name + ".value = " + std::to_string(r.value) +
                        " is outside the config's bounds [" + std::to_string(p.lower) + ", " +
                        std::to_string(p.upper) + "]");
     }
-    vehicle->parameters.SetValue(name, value);
-    if (entry.contains("std") && entry["std"].is_number()) {
-      const double s = entry["std"].get<double>();
-      if (std::isfinite(s) && s > 0) options->initial_parameter_std_by_name[name] = s;
-    }
+    vehicle->parameters.SetValue(r.name, r.value);
+    if (std::isfinite(r.std) && r.std > 0) options->initial_parameter_std_by_name[r.name] = r.std;
     ++used;
   }
   if (used == 0) throw InputError(path + ": no value for any free parameter of the config");
@@ -114,9 +101,7 @@ void PrintEstimates(const EkfResult& r) {
                   r.estimate[k]);
     }
   }
-  for (const ScaleRatio& q : r.ratios) {
-    std::printf("  %-10s % .6e +- %.2e  (scale-free)\n", q.name.c_str(), q.value, q.std);
-  }
+  std::printf("%s", ScaleTableText(r.gauge, r.parameters, r.ratios).c_str());
   std::printf("  NIS per degree of freedom %.4f (95 %% band %.4f .. %.4f)%s\n", r.total_nis.mean,
               r.total_nis.lower, r.total_nis.upper,
               r.total_nis.consistent() ? "" : "  OUTSIDE the band");
@@ -171,6 +156,13 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   if (!FLAGS_ekf_initial_report.empty()) {
     context.notes.push_back(ApplyInitialReport(FLAGS_ekf_initial_report, &vehicle, &options));
   }
+  // --prior: initial value and covariance (a prior on d fixes the scale).
+  std::string prior_note;
+  for (const ParameterPrior& prior : ReadPriorFlag(run.prior, vehicle.parameters, &prior_note)) {
+    vehicle.parameters.SetValue(prior.name, prior.value);
+    options.initial_parameter_std_by_name[prior.name] = prior.std;
+  }
+  if (!prior_note.empty()) context.notes.push_back(prior_note);
   const ParameterSet initial = vehicle.parameters;
   std::fprintf(stderr, "identify: ekf: reading %zu log(s)%s\n", paths.size(),
                validate_paths.empty() ? "" : " and the validation logs");

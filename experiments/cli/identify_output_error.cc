@@ -17,6 +17,7 @@
 #include "experiments/cli/estimation_io.h"
 #include "experiments/cli/flag_checks.h"
 #include "experiments/cli/flags.h"
+#include "experiments/cli/prior_flag.h"
 #include "ident/baseline/balance_holds.h"
 #include "ident/baseline/linear_baseline.h"
 #include "ident/output_error/output_error.h"
@@ -44,7 +45,8 @@ using Clock = std::chrono::steady_clock;
 
 constexpr const char* kOutputErrorUsage =
     "usage: coaxid identify --method=output_error --logs=A.csv[,B.csv] --config=F --out=DIR "
-    "[--validate=C.csv] [--holdout_fraction=0.2] [--segment_s=1] [--start=config|linear_kf]";
+    "[--validate=C.csv] [--holdout_fraction=0.2] [--segment_s=1] [--start=config|linear_kf] "
+    "[--prior=R.json[:name,...]]";
 
 // Starting values from the paper's linear baseline on the balance logs.
 std::string StartFromBaseline(const std::vector<Log>& logs, Vehicle* vehicle) {
@@ -71,29 +73,6 @@ std::string StartFromBaseline(const std::vector<Log>& logs, Vehicle* vehicle) {
          "on the balance logs; the others from the config";
 }
 
-nlohmann::json ParametersJson(const ParameterSet& estimates, const IdentifiabilityReport& id) {
-  nlohmann::json out = nlohmann::json::object();
-  for (int i = 0; i < estimates.size(); ++i) {
-    const Parameter& p = estimates[i];
-    nlohmann::json entry = {{"value", p.value}, {"estimated", p.estimated}};
-    if (!p.unit.empty()) entry["unit"] = p.unit;
-    if (p.estimated) {
-      int k = 0;
-      while (id.names[k] != p.name) ++k;
-      if (id.identifiable[k]) {
-        entry["std"] = id.std[k];
-      } else {
-        entry["std"] = nullptr;
-        entry["identifiable"] = false;
-      }
-    } else {
-      entry["std"] = 0.0;
-    }
-    out[p.name] = entry;
-  }
-  return out;
-}
-
 void PrintEstimates(const OutputErrorResult& result) {
   std::printf("output_error estimates (Cramér-Rao std%s):\n",
               result.coloured_residuals.applied ? ", corrected for coloured residuals" : "");
@@ -106,6 +85,7 @@ void PrintEstimates(const OutputErrorResult& result) {
       std::printf("  %-22s % .6e   not identifiable from these logs\n", name.c_str(), value);
     }
   }
+  std::printf("%s", ScaleTableText(result.gauge, result.parameters, result.ratios).c_str());
   for (const NullDirection& n : result.identifiability.null_directions) {
     std::printf("  note: %s\n", n.explanation.c_str());
   }
@@ -159,9 +139,10 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
   }
 
   std::vector<std::string> notes = {"Validation data: " + split.description + "."};
+  std::string prior_note;
+  options.priors = ReadPriorFlag(run.prior, vehicle.parameters, &prior_note);
+  if (!prior_note.empty()) notes.push_back(prior_note);
   if (FLAGS_start == "linear_kf") notes.push_back(StartFromBaseline(logs, &vehicle));
-  bool any_balance = false, any_flight = false;
-  for (const Log& log : logs) (log.kind == LogKind::kBalance ? any_balance : any_flight) = true;
 
   std::fprintf(stderr, "identify: output_error on %zu log(s), %zu free parameter(s)\n",
                split.estimation.size(), vehicle.parameters.FreeIndices().size());
@@ -174,11 +155,7 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
           : PredictWithFixedParameters(Vehicle{vehicle.config, result.parameters, vehicle.model},
                                        split.validation, result.noise, FLAGS_segment_s, options);
 
-  if (any_flight && !any_balance && !result.identifiability.null_directions.empty()) {
-    notes.push_back(
-        "Flight logs alone: see identifiability.not_identifiable; add a balance log of the same "
-        "vehicle to fix the scale of d and the inertias (model.md, decision 8).");
-  }
+  if (!result.gauge.note.empty()) notes.push_back(result.gauge.note);
 
   // Everything is known: only now write.
   const std::string dir = run.out;
@@ -222,7 +199,9 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
   nlohmann::json report = {
       {"method", "output_error"},
       {"logs", logs_json},
-      {"parameters", ParametersJson(result.parameters, result.identifiability)},
+      {"parameters", ParametersJson(result)},
+      {"scale", result.gauge.ToJson()},
+      {"ratios", RatiosJson(result.ratios)},
       {"fit", FitJson(ChannelFitErrors(split.estimation, result.predictions))},
       {"validation", split.validation.empty()
                          ? nlohmann::json{{"description", split.description},

@@ -18,6 +18,7 @@ struct IdentifyRun {
   std::string config;    // vehicle config (YAML)
   std::string out;       // output folder
   double holdout_fraction = 0.2;
+  std::string prior;     // --prior=REPORT.json[:name,...] (output_error, ekf); empty: none
   bool print_estimates = true;  // the method's table of estimates on stdout
 };
 

@@ -26,6 +26,9 @@ json NumberJson(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 json Entry(const json& p) {
   if (!p.is_object() || !p.contains("value")) return {{"kind", "absent"}};
   const double value = JsonNumber(p, "value");
+  if (p.value("held_for_the_scale", false)) {
+    return {{"kind", "held for the scale"}, {"value", NumberJson(value)}, {"std", nullptr}};
+  }
   if (p.contains("estimated") && p["estimated"] == false) {
     return {{"kind", "config"}, {"value", NumberJson(value)}, {"std", nullptr}};
   }
@@ -79,6 +82,42 @@ json Row(const std::string& name, const std::string& description, double truth,
   return row;
 }
 
+// A scale-free ratio's truth from truth.json's parameters: its name is
+// "a*b/c" (ident/scale_gauge.h).
+double RatioTruth(const json& truth, const std::string& name) {
+  const size_t slash = name.rfind('/');
+  if (slash == std::string::npos) return kNaN;
+  double value = 1 / JsonNumber(truth, name.substr(slash + 1));
+  std::string numerator = name.substr(0, slash);
+  for (size_t start = 0; start <= numerator.size();) {
+    const size_t star = std::min(numerator.find('*', start), numerator.size());
+    value *= JsonNumber(truth, numerator.substr(start, star - start));
+    start = star + 1;
+  }
+  return value;
+}
+
+// The scale-free ratios (report.json "ratios") the methods give, one row each.
+json RatioRows(const std::vector<MethodRun>& runs, const json& truth) {
+  std::vector<std::string> names;
+  for (const MethodRun& run : runs) {
+    if (run.status != "ran" || !run.report.contains("ratios")) continue;
+    for (const auto& [name, r] : run.report["ratios"].items()) {
+      if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+    }
+  }
+  json rows = json::array();
+  for (const std::string& name : names) {
+    json estimates = json::object();
+    for (const MethodRun& run : runs) {
+      if (run.status != "ran" || !run.report.contains("ratios")) continue;
+      estimates[run.method] = Entry(run.report["ratios"].value(name, json()));
+    }
+    rows.push_back(Row(name, "", truth.is_object() ? RatioTruth(truth, name) : kNaN, estimates));
+  }
+  return rows;
+}
+
 // Per-channel {rms, nrmse} of a report's "fit" or "validation" section.
 json ChannelErrors(const json& section) {
   json out = json::object();
@@ -117,6 +156,7 @@ json MethodJson(const MethodRun& run) {
             {"validate", run.validate},
             {"wall_s", NumberJson(run.wall_s)}};
   if (!run.reason.empty()) m["reason"] = run.reason;
+  if (!run.prior.empty()) m["prior"] = run.prior;
   if (run.status != "ran") return m;
   m["report"] = run.folder + "/report.json";
   m["fit"] = ChannelErrors(run.report.value("fit", json()));
@@ -139,6 +179,7 @@ std::string EstimateText(const json& e) {
     return NumberText(value, "%.5g") + " ± " + NumberText(JsonNumber(e, "std"), "%.2g");
   if (kind == "not identifiable") return NumberText(value, "%.5g") + " (not identifiable)";
   if (kind == "config") return NumberText(value, "%.5g") + " (config)";
+  if (kind == "held for the scale") return NumberText(value, "%.5g") + " (held for the scale)";
   if (kind == "over-parameterised") return "two values: Cz_alpha, Cz_beta rows";
   return "-";
 }
@@ -258,6 +299,7 @@ json ComparisonJson(const std::vector<MethodRun>& runs, const json& truth) {
         {"disagree", cz.value("disagree", json())}};
   }
   out["parameters"] = rows;
+  out["ratios"] = RatioRows(runs, truth);
   return out;
 }
 
@@ -297,8 +339,27 @@ std::string ComparisonMarkdown(const json& c, const std::string& plot) {
   o << "\n\"config\": held at the config's value by that method; \"not identifiable\": "
        "the logs do not determine it (no std is made up). An estimate made with a parameter "
        "held inherits that parameter's error: linear_kf's beta scales with its d (model.md "
-       "decision 6); from flight logs alone ekf holds d and its moment parameters (gamma1, "
-       "gamma2, Ixx, Iyy, Izz) scale with it (decision 8).\n";
+       "decision 6). \"held for the scale\": flight logs alone fix only ratios, so the method "
+       "held d, and its moment parameters (gamma1, gamma2, Ixx, Iyy, Izz) scale with it "
+       "(decision 8); compare them through the scale-free ratios below.\n";
+  if (!c.value("ratios", json::array()).empty()) {
+    o << "\n## Scale-free ratios (what flight logs determine; model.md decision 8)\n\n"
+      << "| ratio |" << (has_truth ? " truth |" : "");
+    for (const std::string& m : methods) o << " " << m << " |";
+    for (const std::string& p : Pairs()) o << " " << p << " |";
+    o << "\n|---|" << (has_truth ? "---|" : "");
+    for (size_t i = 0; i < methods.size() + Pairs().size(); ++i) o << "---|";
+    o << "\n";
+    for (const json& row : c["ratios"]) {
+      o << "| " << row["name"].get<std::string>() << " |";
+      if (has_truth) o << " " << NumberText(JsonNumber(row, "truth"), "%.5g") << " |";
+      for (const std::string& m : methods) {
+        o << " " << EstimateText(row["estimates"].value(m, json::object())) << " |";
+      }
+      for (const std::string& p : Pairs()) o << " " << Sigma(row["agreement_sigma"], p) << " |";
+      o << "\n";
+    }
+  }
 
   o << "\n## Agreement in sigma units, |a - b| / sqrt(s_a^2 + s_b^2)"
     << (has_truth ? ", and error against the truth, (estimate - truth) / s" : "") << "\n\n";

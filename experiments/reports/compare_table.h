@@ -36,6 +36,7 @@ struct MethodRun {
   std::vector<std::string> logs;      // estimation logs given to it
   std::vector<std::string> validate;  // held-out logs given to it (may be empty)
   std::string folder;                 // its output folder, relative to compare's
+  std::string prior;                  // the prior it was given, in words (empty: none)
   double wall_s = std::numeric_limits<double>::quiet_NaN();  // wall time of the run [s]
   nlohmann::json report;                                     // its report.json (status ran)
 };

@@ -54,7 +54,9 @@ nlohmann::json TestsJson(const std::vector<ChannelResidualTest>& tests) {
 nlohmann::json SnapshotJson(const ModelSnapshot& s, bool has_validation) {
   nlohmann::json j = {
       {"effects", s.vehicle.EffectNames()},
-      {"parameters", ParametersWithStdJson(s.result.parameters, s.result.identifiability)},
+      {"parameters", ParametersJson(s.result)},
+      {"scale", s.result.gauge.ToJson()},
+      {"ratios", RatiosJson(s.result.ratios)},
       {"fit", FitJson(s.fit)},
       {"residual_tests", TestsJson(s.residual_tests)}};
   nlohmann::json noise = nlohmann::json::object();
@@ -94,27 +96,6 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
     return false;
   }
   return fit.IsValid(why);
-}
-
-nlohmann::json ParametersWithStdJson(const ParameterSet& parameters,
-                                     const IdentifiabilityReport& id) {
-  nlohmann::json out = nlohmann::json::object();
-  for (int i = 0; i < parameters.size(); ++i) {
-    const Parameter& p = parameters[i];
-    nlohmann::json e = {{"value", p.value}, {"estimated", p.estimated}};
-    if (!p.unit.empty()) e["unit"] = p.unit;
-    e["std"] = p.estimated ? nlohmann::json(nullptr) : nlohmann::json(0.0);
-    for (size_t k = 0; k < id.names.size(); ++k) {
-      if (id.names[k] != p.name) continue;
-      if (id.identifiable[k]) {
-        e["std"] = id.std[k];
-      } else {
-        e["identifiable"] = false;
-      }
-    }
-    out[p.name] = e;
-  }
-  return out;
 }
 
 DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLog>& estimation,
@@ -226,7 +207,7 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
   }
   nlohmann::json added_parameters = nlohmann::json::object();
   const nlohmann::json final_parameters =
-      ParametersWithStdJson(r.final.result.parameters, r.final.result.identifiability);
+      ParametersJson(r.final.result);
   for (const std::string& e : r.added) {
     for (auto it = final_parameters.begin(); it != final_parameters.end(); ++it) {
       if (it.key().rfind(e + ".", 0) == 0) added_parameters[it.key()] = it.value();

@@ -82,8 +82,4 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
 // discovery.json of cli-and-reports.md.
 nlohmann::json DiscoveryJson(const DiscoveryResult& result, const DiscoveryOptions& options);
 
-// {"name": {"value", "std", "estimated"}} for every parameter.
-nlohmann::json ParametersWithStdJson(const ParameterSet& parameters,
-                                     const IdentifiabilityReport& identifiability);
-
 }  // namespace coaxid

@@ -64,27 +64,6 @@ std::string Time(double t) {
   return buffer;
 }
 
-// Operating points for the scale-invariance check: up to 20 rows spread over
-// the logs, states as measured (0 where absent), the rows' inputs.
-std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs) {
-  std::vector<ModelSample> samples;
-  for (const EstimationLog& log : logs) {
-    const int count = std::max(1, 20 / static_cast<int>(logs.size()));
-    for (int s = 0; s < count; ++s) {
-      const int row = static_cast<int>((static_cast<long>(log.NumRows() - 1) * s) / count);
-      ModelSample sample;
-      sample.x.setZero();
-      for (int i = 0; i < kNumStates; ++i) {
-        const int col = log.ChannelColumn(i);
-        if (col >= 0 && std::isfinite(log.values(row, col))) sample.x[i] = log.values(row, col);
-      }
-      sample.u = log.inputs.input(row);
-      samples.push_back(sample);
-    }
-  }
-  return samples;
-}
-
 struct ChannelAccumulator {
   double nis = 0, innovation_squares = 0, innovation_variance = 0;  // sums of nu^2/S, nu^2, S
   long count = 0;
@@ -555,36 +534,15 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   EkfResult result;
   result.parameters = vehicle.parameters;
 
-  // Scale (model.md, decision 8).
-  result.scale = FindScaleDirection(vehicle.model, result.parameters, SamplePoints(logs));
-  if (result.scale.exists) {
-    std::vector<std::string> names, fixed;
-    for (int i : result.scale.group) {
-      names.push_back(result.parameters[i].name);
-      if (!result.parameters[i].estimated) fixed.push_back(result.parameters[i].name);
-    }
-    const std::string group_note = "Flight logs determine only ratios of " + Join(names) +
-                                   " (scaling them together leaves every flight output "
-                                   "unchanged; model.md decision 8).";
-    if (fixed.empty() && options.scale_anchor == EkfOptions::ScaleAnchor::kHubDistance) {
-      result.parameters.SetEstimated(BaseParameterName(kHubDistance), false);
-      result.anchored = BaseParameterName(kHubDistance);
-      char buffer[64];
-      std::snprintf(buffer, sizeof buffer, "%g m", result.parameters[kHubDistance].value);
-      result.notes.push_back(
-          group_note + " d is held fixed at its config value (" + buffer +
-          ") to fix the scale; the other members are estimates relative to that d (multiply "
-          "them by d_true / d_config if d is measured differently) and the scale-free ratios "
-          "are reported. A balance log fixes the scale (linear_kf, output_error).");
-    } else if (fixed.empty()) {
-      result.notes.push_back(group_note +
-                             " All of them were augmented (no scale anchor): the undetermined "
-                             "direction is reported and the parameters along it get no std.");
-    } else {
-      result.notes.push_back(group_note + " The scale is fixed by " + Join(fixed) +
-                             " (estimated: false in the config).");
-    }
+  // Scale (model.md, decision 8; ident/scale_gauge.h): an initial std given
+  // by name is a prior.
+  std::vector<std::string> prior_names;
+  for (const auto& entry : options.initial_parameter_std_by_name) {
+    prior_names.push_back(entry.first);
   }
+  result.gauge = FixScaleGauge(vehicle.model, logs, prior_names, options.scale_anchor,
+                               &result.parameters);
+  if (!result.gauge.note.empty()) result.notes.push_back(result.gauge.note);
 
   const FreeParameters free(result.parameters);
   const int np = free.size();
@@ -745,15 +703,21 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
 
   // Identifiability.
   Eigen::VectorXd scale_scaled;
-  if (result.scale.exists) {
+  if (result.gauge.direction.exists) {
     scale_scaled.resize(np);
     for (int k = 0; k < np; ++k) {
-      scale_scaled[k] = result.scale.direction[free.indices()[k]] / free.scales()[k];
+      scale_scaled[k] = result.gauge.direction.direction[free.indices()[k]] / free.scales()[k];
     }
   }
+  // Against the uninformative start: a prior given by name (--prior, an
+  // earlier report) is information, so what it fixes (the scale, by a prior
+  // on d) counts as determined and its std propagates.
+  const Eigen::MatrixXd uninformative =
+      result.prior_covariance.diagonal()
+          .cwiseMax(options.initial_parameter_std * options.initial_parameter_std)
+          .asDiagonal();
   result.undetermined = FindUndeterminedDirections(
-      result.prior_covariance, result.covariance, options.undetermined_variance_ratio,
-      scale_scaled);
+      uninformative, result.covariance, options.undetermined_variance_ratio, scale_scaled);
   result.identifiable.assign(np, true);
   for (const UndeterminedDirection& d : result.undetermined) {
     std::string loads;
@@ -776,8 +740,9 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
                            ". These parameters are not separately identifiable from these "
                            "logs; no std is reported for them.");
   }
-  result.ratios = ScaleRatios(result.scale, result.parameters, free.indices(), free.scales(),
-                              result.covariance);
+  result.ratios =
+      ScaleFreeRatios(result.gauge, result.parameters, free.indices(),
+                      free.scales().asDiagonal() * result.covariance * free.scales().asDiagonal());
 
   // Consistency (pass 1).
   for (const auto& [name, a] : pass1.channel_stats) {

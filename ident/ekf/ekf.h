@@ -90,6 +90,7 @@
 #include "ident/ekf/model.h"
 #include "ident/estimation_log.h"
 #include "ident/noise_weights.h"
+#include "ident/scale_gauge.h"
 
 namespace coaxid {
 
@@ -137,7 +138,9 @@ struct EkfOptions {
   int noise_adaptations = 0;
   bool smoother = true;
 
-  enum class ScaleAnchor { kHubDistance, kNone };
+  // ident/scale_gauge.h. A parameter with initial_parameter_std_by_name is a
+  // prior: on a member of the scale group it fixes the scale.
+  using ScaleAnchor = coaxid::ScaleAnchor;
   ScaleAnchor scale_anchor = ScaleAnchor::kHubDistance;
 
   // Consistency statistics skip the first nis_burn_in_s of each log [s].
@@ -227,12 +230,12 @@ struct EkfResult {
   bool covariance_pass = false;
   std::string estimates_from;              // in words, for the report
 
-  // Identifiability (ekf/identifiability.h).
-  ScaleDirection scale;
-  std::string anchored;  // the parameter held to fix the scale ("d"), or empty
+  // Identifiability: the scale (ident/scale_gauge.h; gauge.held is "d" when
+  // it held d) and the undetermined directions (ekf/identifiability.h).
+  ScaleGauge gauge;
   std::vector<UndeterminedDirection> undetermined;
   std::vector<bool> identifiable;  // per free parameter
-  std::vector<ScaleRatio> ratios;
+  std::vector<ScaleFreeRatio> ratios;
 
   std::vector<EkfLogHistory> logs;
   std::vector<NisStatistic> channel_nis;  // pass 1, after the burn-in

@@ -115,10 +115,7 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
       entry["estimated"] = false;
       std::string source = "config";
       if (i < kAlpha) source = "config: known constant";
-      if (p.name == r.anchored) {
-        source = "config: held fixed to fix the scale (flight logs determine only ratios; "
-                 "model.md decision 8)";
-      } else if (i >= kAlpha) {
+      if (i >= kAlpha) {
         source = "config: estimated: false";
       }
       entry["source"] = source;
@@ -126,12 +123,14 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
     if (!p.unit.empty()) entry["unit"] = p.unit;
     parameters[p.name] = entry;
   }
+  MarkHeldForTheScale(r.gauge, &parameters);
   report["parameters"] = parameters;
-  json ratios = json::object();
-  for (const ScaleRatio& q : r.ratios) {
-    ratios[q.name] = {{"value", Number(q.value)}, {"std", Number(q.std)}};
-  }
-  if (!r.ratios.empty()) report["scale_free_ratios"] = ratios;
+  report["scale"] = r.gauge.ToJson();
+  report["scale"]["anchor_option"] =
+      options.scale_anchor == ScaleAnchor::kHubDistance
+          ? "d (hold d when nothing else fixes the scale)"
+          : "none (augment all; report the undetermined direction)";
+  report["ratios"] = RatiosJson(r.ratios);
 
   const std::string fit_definition =
       "model = open-loop prediction over consecutive windows of window_s, each started from "
@@ -206,17 +205,6 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
       {"consistent", all_consistent}};
   ekf["log_likelihood"] = Number(r.log_likelihood);
 
-  json scale;
-  scale["invariance_found"] = r.scale.exists;
-  std::vector<std::string> group;
-  for (int i : r.scale.group) group.push_back(r.parameters[i].name);
-  scale["group"] = group;
-  scale["residual"] = Number(r.scale.residual);
-  scale["anchored"] = r.anchored.empty() ? json(nullptr) : json(r.anchored);
-  scale["anchor_option"] = options.scale_anchor == EkfOptions::ScaleAnchor::kHubDistance
-                               ? "d (hold d at its config value when the whole group is free)"
-                               : "none (augment all; report the undetermined direction)";
-  ekf["scale"] = scale;
   json undetermined = json::array();
   for (const UndeterminedDirection& d : r.undetermined) {
     json components = json::object();

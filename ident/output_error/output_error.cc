@@ -7,6 +7,7 @@
 #include <memory>
 
 #include <ceres/ceres.h>
+#include <ceres/normal_prior.h>
 #include <glog/logging.h>
 
 #include "core/errors.h"
@@ -169,6 +170,10 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
     if (std::isfinite(lower[k])) a.problem->SetParameterLowerBound(theta_scaled, k, lower[k]);
     if (std::isfinite(upper[k])) a.problem->SetParameterUpperBound(theta_scaled, k, upper[k]);
   }
+  const ScaledPriorRows prior = PriorRows(options.priors, free.names(), free.scales());
+  if (prior.A.rows() > 0) {
+    a.problem->AddResidualBlock(new ceres::NormalPrior(prior.A, prior.b), nullptr, theta_scaled);
+  }
   ceres::LossFunction* loss = nullptr;  // owned per residual block below
   a.segments.resize(logs.size());
   a.segment_costs.resize(logs.size());
@@ -312,13 +317,24 @@ std::map<std::string, FitError> ChannelFitErrors(const std::vector<EstimationLog
   return out;
 }
 
-OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
+OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<EstimationLog>& logs,
                                  const OutputErrorOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("output-error options: " + why);
   if (logs.empty()) throw InputError("output-error needs at least one log");
+  for (const ParameterPrior& prior : options.priors) {
+    if (!declared.parameters.Has(prior.name) || !(prior.std > 0) || !std::isfinite(prior.value)) {
+      throw InputError("output-error prior on '" + prior.name +
+                       "': no such parameter, or not a finite value with std > 0");
+    }
+  }
   const auto start = Clock::now();
   OutputErrorResult result;
+  // The start (priors' values) and the scale gauge (model.md decision 8).
+  Vehicle vehicle = declared;
+  StartAtPriors(options.priors, &vehicle.parameters);
+  result.gauge = FixScaleGauge(vehicle.model, logs, PriorNames(options.priors),
+                               options.scale_anchor, &vehicle.parameters);
   result.parameters = vehicle.parameters;
   const FreeParameters free(vehicle.parameters);
   if (free.size() == 0) throw InputError("no parameter is marked estimated in the config");
@@ -451,9 +467,11 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
   }
 
   const auto covariance_start = Clock::now();
-  const OutputErrorInformation information =
+  OutputErrorInformation information =
       ComputeOutputErrorInformation(ResidualBlocks(vehicle, logs, previous), theta_scaled.data(),
                                     free.size(), options.coloured_residual_correction);
+  const ScaledPriorRows prior = PriorRows(options.priors, free.names(), free.scales());
+  information.information.noalias() += prior.A.transpose() * prior.A;
   result.identifiability =
       AnalyzeIdentifiability(information.information, free.names(), free.scales());
   if (options.coloured_residual_correction) {
@@ -472,6 +490,8 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
     coloured.factor = report.std.cwiseQuotient(coloured.white_std);
   }
   free.WriteBack(theta_scaled.data(), &result.parameters);
+  result.ratios = ScaleFreeRatios(result.gauge, result.parameters, free.indices(),
+                                  result.identifiability.covariance);
   result.noise = noise;
   result.segments = previous.segments;
   result.predictions = previous_predictions;
@@ -504,6 +524,28 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
       {"sensitivity_run_thread_seconds", 1e-9 * times.sensitivity_ns.load()},
       {"outputs_thread_seconds", 1e-9 * times.outputs_ns.load()}};
   return result;
+}
+
+nlohmann::json ParametersJson(const OutputErrorResult& result) {
+  const IdentifiabilityReport& id = result.identifiability;
+  nlohmann::json out = nlohmann::json::object();
+  for (int i = 0; i < result.parameters.size(); ++i) {
+    const Parameter& p = result.parameters[i];
+    nlohmann::json e = {{"value", p.value}, {"estimated", p.estimated}};
+    if (!p.unit.empty()) e["unit"] = p.unit;
+    e["std"] = p.estimated ? nlohmann::json(nullptr) : nlohmann::json(0.0);
+    for (size_t k = 0; k < id.names.size(); ++k) {
+      if (id.names[k] != p.name) continue;
+      if (id.identifiable[k]) {
+        e["std"] = id.std[k];
+      } else {
+        e["identifiable"] = false;
+      }
+    }
+    out[p.name] = e;
+  }
+  MarkHeldForTheScale(result.gauge, &out);
+  return out;
 }
 
 std::vector<Eigen::MatrixXd> PredictWithFixedParameters(const Vehicle& vehicle,

@@ -27,6 +27,8 @@
 #include "ident/estimation_log.h"
 #include "ident/identifiability.h"
 #include "ident/noise_weights.h"
+#include "ident/parameter_prior.h"
+#include "ident/scale_gauge.h"
 
 namespace coaxid {
 
@@ -40,6 +42,13 @@ struct OutputErrorOptions {
   double coarse_function_tolerance = 1e-4;
   // Re-estimate the noise std from the residuals and solve again this many times.
   int noise_relaxations = 2;
+  // Gaussian priors (ident/parameter_prior.h): the fit starts at their values
+  // and adds (value - mean) / std residuals; on the scale group they fix the
+  // scale.
+  std::vector<ParameterPrior> priors;
+  // Without a balance log or prior fixing the scale, hold d (model.md
+  // decision 8; ident/scale_gauge.h), or with kNone leave every member free.
+  ScaleAnchor scale_anchor = ScaleAnchor::kHubDistance;
   // Start (and, with noise_relaxations = 0, keep) these noise std; empty: from the data.
   NoiseWeights noise;
   // Continuity residual scale [state units] of the final and of the coarse
@@ -97,8 +106,10 @@ struct FittedSegments {
 struct OutputErrorResult {
   bool usable = false;
   std::string why_not_usable;
-  ParameterSet parameters;                  // estimates written back
+  ParameterSet parameters;                  // estimates written back (d not estimated if held)
   IdentifiabilityReport identifiability;    // std, covariance, correlation, null directions
+  ScaleGauge gauge;                         // what fixed the scale (model.md decision 8)
+  std::vector<ScaleFreeRatio> ratios;       // what flight logs determine, with std
   NoiseWeights noise;                       // the weights of the final solve
   std::vector<FittedSegments> segments;     // per log (empty for balance logs)
   // Model outputs on the fitted logs: flight, predictions over each segment
@@ -122,11 +133,18 @@ struct OutputErrorResult {
   nlohmann::json timing;                    // where the time went
 };
 
-// Fits vehicle's free parameters to the logs. Throws InputError for invalid
+// Fits vehicle's free parameters to the logs (after the scale gauge: with
+// flight logs alone d is held, see OutputErrorOptions::scale_anchor). Throws InputError for invalid
 // options or logs that cannot be used (too short for one segment), and
 // returns usable = false (with the reason) when the solve fails.
 OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
                                  const OutputErrorOptions& options);
+
+// report.json "parameters" of a fit: {"name": {"value", "std", "estimated",
+// "unit"}} for every parameter; a parameter the data do not determine gets
+// "std": null and "identifiable": false, the one held for the scale is
+// marked so.
+nlohmann::json ParametersJson(const OutputErrorResult& result);
 
 // Model predictions for logs with the parameters fixed (held-out validation):
 // balance logs through the static model; flight logs over consecutive windows

@@ -73,9 +73,10 @@ TEST_F(EkfCliTest, WritesTheReportAndHistories) {
   // d holds the scale (model.md decision 8): not estimated, and said so.
   EXPECT_EQ(report["parameters"]["d"]["estimated"], false);
   EXPECT_TRUE(report["parameters"]["d"]["std"].is_null());
-  EXPECT_TRUE(Contains(report["parameters"]["d"]["source"].get<std::string>(), "decision 8"));
-  EXPECT_EQ(report["ekf"]["scale"]["anchored"], "d");
-  EXPECT_TRUE(report["scale_free_ratios"].contains("Ixx/d"));
+  EXPECT_TRUE(Contains(report["parameters"]["d"]["source"].get<std::string>(), "held for the scale"));
+  EXPECT_EQ(report["parameters"]["d"]["held_for_the_scale"], true);
+  EXPECT_EQ(report["scale"]["held"], "d");
+  EXPECT_TRUE(report["ratios"]["d*beta/Ixx"]["std"].is_number());
   EXPECT_EQ(report["parameters"]["m"]["estimated"], false);
   // Fit and validation: every channel, overall nrmse, what "model" means.
   for (const char* section : {"fit", "validation"}) {

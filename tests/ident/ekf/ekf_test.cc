@@ -210,14 +210,13 @@ TEST(EkfTest, ScaleAnchoredByDefault) {
   options.smoother = false;
   const EkfResult r = RunEkf(f.config, {MakeEstimationLog(f.log)}, TruthNoise(f.scenario), options);
   ASSERT_TRUE(r.usable) << r.failure;
-  EXPECT_EQ(r.anchored, "d");
+  EXPECT_EQ(r.gauge.held, "d");
   EXPECT_FALSE(r.parameters.Get("d").estimated);
   EXPECT_EQ(r.parameters.Value("d"), f.config.parameters.Value("d"));
   EXPECT_TRUE(r.undetermined.empty());
-  ASSERT_EQ(r.ratios.size(), 5u);
-  for (const ScaleRatio& q : r.ratios) {
-    const double truth = f.truth.parameters[q.numerator].value /
-                         f.truth.parameters[q.denominator].value;
+  ASSERT_EQ(r.ratios.size(), 6u);
+  for (const ScaleFreeRatio& q : r.ratios) {
+    const double truth = q.Evaluate(f.truth.parameters);
     EXPECT_LE(std::fabs(q.value - truth), 3 * q.std) << q.name << " " << q.value << " +- "
                                                      << q.std << ", truth " << truth;
   }
@@ -231,7 +230,7 @@ TEST(EkfTest, UnanchoredScaleIsReportedNotInvented) {
   const EkfResult r = RunEkf(f.config, {MakeEstimationLog(f.log)}, TruthNoise(f.scenario), options);
   ASSERT_TRUE(r.usable) << r.failure;
   ASSERT_EQ(r.free_names.size(), 12u);
-  EXPECT_TRUE(r.anchored.empty());
+  EXPECT_TRUE(r.gauge.held.empty());
   ASSERT_EQ(r.undetermined.size(), 1u);
   // With the parameters' mean fixed in the covariance pass the direction gets
   // exactly no information (ratio 1 up to the random walk, 1e-10 / s).
@@ -243,10 +242,9 @@ TEST(EkfTest, UnanchoredScaleIsReportedNotInvented) {
                           name == "Ixx" || name == "Iyy" || name == "Izz";
     EXPECT_EQ(r.identifiable[k], !in_group) << name;
   }
-  ASSERT_EQ(r.ratios.size(), 5u);
-  for (const ScaleRatio& q : r.ratios) {
-    const double truth = f.truth.parameters[q.numerator].value /
-                         f.truth.parameters[q.denominator].value;
+  ASSERT_EQ(r.ratios.size(), 6u);
+  for (const ScaleFreeRatio& q : r.ratios) {
+    const double truth = q.Evaluate(f.truth.parameters);
     EXPECT_LE(std::fabs(q.value - truth), 3 * q.std) << q.name;
   }
 }

@@ -109,13 +109,18 @@ TEST(OutputError, NoisyFlightAndBalanceEstimatesWithinThreeStd) {
 }
 
 // model.md, decision 8: flight alone sees only ratios.
+// Without the scale anchor (model.md decision 8 held off), the null direction
+// is found and no std is made up for the parameters along it.
 TEST(OutputError, FlightOnlyReportsTheMomentScaleAsNotIdentifiable) {
   const Vehicle nominal = Nominal();
   const Vehicle truth = MakeTruthVehicle(nominal.config, TruthScenario());
   Vehicle start = StartOff(nominal, truth, 1.1);
   for (const char* name : {"Cx", "Cy"}) start.parameters.SetEstimated(name, false);
   const std::vector<EstimationLog> logs = {MakeEstimationLog(FlightLog(truth, 3.0, 5, true))};
-  const OutputErrorResult r = FitOutputError(start, logs, FastOptions());
+  OutputErrorOptions options = FastOptions();
+  options.scale_anchor = ScaleAnchor::kNone;
+  const OutputErrorResult r = FitOutputError(start, logs, options);
+  EXPECT_EQ(r.gauge.fixed_by, "nothing");
   ASSERT_TRUE(r.usable) << r.why_not_usable;
   ASSERT_FALSE(r.identifiability.null_directions.empty());
   bool found = false;

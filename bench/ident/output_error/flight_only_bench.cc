@@ -1,0 +1,245 @@
+// Wall time of the output-error fit (FitOutputError) on logs this program
+// simulates itself, under conditions unlike the shipped data/glmav logs, so
+// the timing and the accuracy are not tuned to one data set:
+//  - the truth vehicle is configs/glmav.yaml with every unknown multiplied by
+//    1 +/- 10..30 % (kTruthFactors: magnitudes uniform in [0.10, 0.30], random
+//    signs, drawn once with std::mt19937 seed 37 and rounded to 0.01; that
+//    seed was picked among those whose hover trim has |omega1 - omega2| near
+//    45 rad/s, far from the nominal vehicle's ~12 rad/s);
+//  - a 60 s, 200 Hz closed-loop flight (experiments/simulation) with a
+//    stiffer controller tuning than the default, other waypoints, and
+//    orthogonal multisines of 0.05 rad rms on both swashplate angles and
+//    3 rad/s rms on both rotor speeds (about 2.5x the shipped flight's);
+//  - the built-in `balance` scenario (configs/scenarios/balance.yaml's grid)
+//    on the same truth vehicle.
+//
+// Benchmarks (Iterations(1): one fit is seconds):
+//  - BM_FlightOnlyFit: the flight log alone, d held at the config's value
+//    (model.md decision 8: from flight logs d, gamma1, gamma2, Ixx, Iyy, Izz
+//    share one unobservable scale; holding d fixes it), so the scale-free
+//    ratios d*beta/Ixx, gamma1/Izz, Iyy/Ixx, Izz/Ixx are compared with truth;
+//  - BM_FlightOnlyFitFree: the same with d free (the scale direction is then
+//    a null direction of the information);
+//  - BM_FlightPlusBalanceFit: flight + balance log, all twelve unknowns free.
+// Every fit starts from the config's nominal values with default
+// OutputErrorOptions. Counters: solver iterations and wall seconds by kind
+// (result.timing split_seconds). stderr: the full timing json, then per free
+// parameter estimate, truth, Cramér-Rao std and (estimate - truth) / std, and
+// the ratios with their delta-method std.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "dynamics/trim.h"
+#include "experiments/simulation/excitation.h"
+#include "experiments/simulation/scenario.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "ident/estimation_log.h"
+#include "ident/output_error/output_error.h"
+
+namespace coaxid {
+namespace {
+
+// Truth / nominal per unknown (see the header comment for how they were drawn).
+const std::vector<std::pair<std::string, double>> kTruthFactors = {
+    {"alpha", 1.20}, {"beta", 0.84}, {"sigma0", 0.89}, {"Cx", 0.77},
+    {"Cy", 1.16},    {"Cz", 0.78},   {"gamma1", 1.22}, {"gamma2", 0.82},
+    {"d", 1.28},     {"Ixx", 0.73},  {"Iyy", 1.27},    {"Izz", 1.25}};
+
+std::string ConfigPath() { return std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml"; }
+
+std::map<std::string, double> TruthParameters(const ParameterSet& nominal) {
+  std::map<std::string, double> truth;
+  for (const auto& [name, factor] : kTruthFactors) truth[name] = factor * nominal.Value(name);
+  return truth;
+}
+
+// Root mean square of a multisine channel of unit peak amplitude over one period.
+double UnitMultisineRms(Excitation spec, const std::string& channel) {
+  for (auto& [name, amplitude] : spec.amplitude) amplitude = name == channel ? 1.0 : 0.0;
+  spec.start_s = 0;
+  const ExcitationSignal signal(spec);
+  const int c = channel == "omega1" ? 0 : channel == "omega2" ? 1 : channel == "delta_cx" ? 2 : 3;
+  const int n = 20000;
+  double sum = 0;
+  for (int i = 0; i < n; ++i) sum += std::pow(signal.At(spec.period_s * i / n)[c], 2);
+  return std::sqrt(sum / n);
+}
+
+Scenario FlightScenarioForBench(const std::map<std::string, double>& truth) {
+  Scenario s;
+  s.kind = Scenario::Kind::kFlight;
+  s.name = "flight_only_bench";
+  s.seed = 2024;
+  s.truth_parameters = truth;
+  FlightScenario& f = s.flight;
+  f.duration_s = 60;
+  f.rate_hz = 200;
+  // Stiffer attitude and yaw loops, a firmer altitude loop, a livelier
+  // position loop than ControllerGains' defaults.
+  f.gains.att_kp = 1.4;
+  f.gains.att_kd = 0.22;
+  f.gains.alt_kp = 40;
+  f.gains.alt_kd = 25;
+  f.gains.alt_ki = 8;
+  f.gains.yaw_kp = 2.5;
+  f.gains.yaw_kd = 1.6;
+  f.gains.pos_kp = 0.8;
+  f.gains.pos_kd = 1.3;
+  f.gains.max_tilt = 0.12;
+  f.waypoints = {{0, 0.0, 0.0, 2.0, 0.3},
+                 {15, -0.4, 0.3, 2.3, 0.0},
+                 {35, 0.3, -0.3, 1.7, -0.25},
+                 {50, 0.0, 0.0, 2.0, 0.1}};
+  Excitation& e = f.excitation;
+  e.type = Excitation::Type::kMultisine;
+  e.start_s = 1.0;
+  e.min_hz = 0.15;
+  e.max_hz = 5.0;
+  e.period_s = 20.0;
+  // Amplitudes are peaks: set them so each channel has the wanted rms.
+  const std::map<std::string, double> rms = {
+      {"omega1", 3.0}, {"omega2", 3.0}, {"delta_cx", 0.05}, {"delta_cy", 0.05}};
+  for (const auto& [channel, target] : rms) {
+    e.amplitude[channel] = target / UnitMultisineRms(e, channel);
+  }
+  return s;
+}
+
+struct BenchData {
+  Vehicle nominal;
+  Vehicle truth;
+  EstimationLog flight, balance;
+  double trim_omega1 = 0, trim_omega2 = 0;
+};
+
+const BenchData& Data() {
+  static const BenchData data = [] {
+    BenchData d;
+    d.nominal = LoadVehicle(ConfigPath());
+    const Scenario flight = FlightScenarioForBench(TruthParameters(d.nominal.parameters));
+    d.truth = MakeTruthVehicle(d.nominal.config, flight);
+    const Waypoint& w0 = flight.flight.waypoints.front();
+    const HoverTrim trim =
+        TrimHover(d.truth.model, d.truth.parameters.Values(), w0.height, w0.heading);
+    d.trim_omega1 = trim.input[0];
+    d.trim_omega2 = trim.input[1];
+    d.flight = MakeEstimationLog(SimulateScenario(d.truth, flight));
+    Scenario balance = LoadScenario("balance");
+    balance.truth_parameters = flight.truth_parameters;
+    d.balance = MakeEstimationLog(SimulateScenario(d.truth, balance));
+    std::fprintf(stderr,
+                 "truth hover trim: omega1 %.1f, omega2 %.1f rad/s (|difference| %.1f); flight "
+                 "%d rows, balance %d rows\n",
+                 d.trim_omega1, d.trim_omega2, std::fabs(d.trim_omega1 - d.trim_omega2),
+                 d.flight.NumRows(), d.balance.NumRows());
+    return d;
+  }();
+  return data;
+}
+
+// Scale-free ratios of decision 8 as (name, factors with exponents).
+const std::vector<std::pair<std::string, std::vector<std::pair<std::string, int>>>> kRatios = {
+    {"d*beta/Ixx", {{"d", 1}, {"beta", 1}, {"Ixx", -1}}},
+    {"gamma1/Izz", {{"gamma1", 1}, {"Izz", -1}}},
+    {"Iyy/Ixx", {{"Iyy", 1}, {"Ixx", -1}}},
+    {"Izz/Ixx", {{"Izz", 1}, {"Ixx", -1}}}};
+
+double Ratio(const ParameterSet& p, const std::vector<std::pair<std::string, int>>& factors) {
+  double r = 1;
+  for (const auto& [name, power] : factors) r *= std::pow(p.Value(name), power);
+  return r;
+}
+
+// Prints estimates against truth and returns max |estimate - truth| / std
+// over the parameters the logs determine (raw values when d is estimated or
+// given by a balance log; otherwise only the scale-free ones) and the ratios.
+double ReportAccuracy(const OutputErrorResult& result, const ParameterSet& truth,
+                      bool scale_fixed_by_data) {
+  const IdentifiabilityReport& id = result.identifiability;
+  static const std::vector<std::string> kScaleBound = {"d", "gamma1", "gamma2", "Ixx", "Iyy", "Izz"};
+  double max_z = 0;
+  std::fprintf(stderr, "%-8s %13s %13s %11s %7s\n", "param", "estimate", "truth", "std", "z");
+  for (size_t k = 0; k < id.names.size(); ++k) {
+    const std::string& name = id.names[k];
+    const double est = result.parameters.Value(name), tru = truth.Value(name);
+    const double z = (est - tru) / id.std[k];
+    const bool scale_bound =
+        std::find(kScaleBound.begin(), kScaleBound.end(), name) != kScaleBound.end();
+    const bool compare = scale_fixed_by_data || !scale_bound;
+    if (compare && std::isfinite(z)) max_z = std::max(max_z, std::fabs(z));
+    std::fprintf(stderr, "%-8s %13.6g %13.6g %11.3g %7.2f%s\n", name.c_str(), est, tru, id.std[k],
+                 z, compare ? "" : "  (scale-bound: see ratios)");
+  }
+  // Ratios: delta-method std from the covariance (a pseudo-inverse on the
+  // identifiable subspace; the ratios are orthogonal to the scale direction).
+  std::fprintf(stderr, "%-11s %10s %10s %10s %7s\n", "ratio", "estimate", "truth", "std", "z");
+  for (const auto& [ratio_name, factors] : kRatios) {
+    const double est = Ratio(result.parameters, factors), tru = Ratio(truth, factors);
+    const size_t n = id.names.size();
+    std::vector<double> g(n, 0.0);  // d ratio / d parameter
+    for (const auto& [name, power] : factors) {
+      for (size_t k = 0; k < n; ++k) {
+        if (id.names[k] == name) g[k] = est * power / result.parameters.Value(name);
+      }
+    }
+    double variance = 0;
+    for (size_t a = 0; a < n; ++a) {
+      for (size_t b = 0; b < n; ++b) variance += g[a] * id.covariance(a, b) * g[b];
+    }
+    const double std = std::sqrt(std::max(variance, 0.0));
+    const double z = (est - tru) / std;
+    if (std::isfinite(z)) max_z = std::max(max_z, std::fabs(z));
+    std::fprintf(stderr, "%-11s %10.5g %10.5g %10.3g %7.2f\n", ratio_name.c_str(), est, tru, std,
+                 z);
+  }
+  return max_z;
+}
+
+void RunFit(benchmark::State& state, const char* name, const std::vector<EstimationLog>& logs,
+            bool estimate_d, bool scale_fixed_by_data) {
+  const BenchData& data = Data();
+  Vehicle start = data.nominal;  // nominal values: the config's
+  if (!estimate_d) start.parameters.SetEstimated("d", false);
+  const OutputErrorOptions options;
+  OutputErrorResult result;
+  for (auto _ : state) {
+    result = FitOutputError(start, logs, options);
+    if (!result.usable) {
+      state.SkipWithError(result.why_not_usable.c_str());
+      return;
+    }
+  }
+  state.counters["iterations"] = result.iterations;
+  for (const auto& [kind, seconds] : result.timing["split_seconds"].items()) {
+    state.counters[kind + "_s"] = seconds.get<double>();
+  }
+  std::fprintf(stderr, "%s: %s\n%s\n", name, result.termination.c_str(),
+               result.timing.dump(1).c_str());
+  state.counters["max_abs_z"] = ReportAccuracy(result, data.truth.parameters, scale_fixed_by_data);
+}
+
+void BM_FlightOnlyFit(benchmark::State& state) {
+  RunFit(state, __func__, {Data().flight}, /*estimate_d=*/false, /*scale_fixed_by_data=*/false);
+}
+void BM_FlightOnlyFitFree(benchmark::State& state) {
+  RunFit(state, __func__, {Data().flight}, /*estimate_d=*/true, /*scale_fixed_by_data=*/false);
+}
+void BM_FlightPlusBalanceFit(benchmark::State& state) {
+  RunFit(state, __func__, {Data().flight, Data().balance}, /*estimate_d=*/true,
+         /*scale_fixed_by_data=*/true);
+}
+BENCHMARK(BM_FlightOnlyFit)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_FlightOnlyFitFree)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_FlightPlusBalanceFit)->Iterations(1)->Unit(benchmark::kSecond);
+
+}  // namespace
+}  // namespace coaxid
+
+BENCHMARK_MAIN();
