@@ -148,7 +148,18 @@ TEST_F(CompareCliTest, TableHasAllThreeMethodsConsistentFiguresAndTheCzSplit) {
   EXPECT_GT(std::fabs(Row(c, "beta")["error_sigma"]["linear_kf"].get<double>()), 10)
       << "the table shows the linear method's d bias";
   EXPECT_EQ(Row(c, "alpha")["estimates"]["output_error"]["kind"], "estimated");
-  EXPECT_EQ(Row(c, "d")["estimates"]["ekf"]["kind"], "config");  // model.md decision 8
+  // The scale (model.md decision 8): ekf gets output_error's d (fixed by the
+  // balance log) as a prior, so both answer the same question: within their
+  // combined std on every parameter. Measured: at most 1.12 combined std
+  // (beta, Ixx, Iyy), each method within 1.1 std of the truth there; 2 is
+  // the 95 % level of one comparison.
+  EXPECT_EQ(Row(c, "d")["estimates"]["ekf"]["kind"], "estimated");
+  for (const json& row : c["parameters"]) {
+    const json& z = row["agreement_sigma"];
+    if (!z.contains("output_error vs ekf")) continue;
+    EXPECT_LT(z["output_error vs ekf"].get<double>(), 2.0) << row.dump();
+  }
+  EXPECT_FALSE(c["ratios"].empty());
 
   // The over-parameterisation: Cz_alpha, Cz_beta (linear only, truth Cz alpha
   // and Cz beta) and the two Cz they imply, each against the others' one Cz.
