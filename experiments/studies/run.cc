@@ -14,6 +14,7 @@
 #include "ident/estimation_log.h"
 #include "ident/noise_weights.h"
 #include "ident/output_error/output_error.h"
+#include "ident/scale_gauge.h"
 
 namespace coaxid {
 namespace {
@@ -71,12 +72,28 @@ nlohmann::json IdentifiabilityParameters(const ParameterSet& estimates,
   return p;
 }
 
+// The scale-free ratios (ident/scale_gauge.h) as more entries of a record's
+// "parameters", so the summary gives their bias, spread and coverage too:
+// from flight logs alone they are what the fits determine.
+void AddRatios(const std::vector<ScaleFreeRatio>& ratios, const ParameterSet& estimates,
+               const Vehicle& truth, nlohmann::json* p) {
+  for (const ScaleFreeRatio& q : ratios) {
+    double value = 1;
+    for (const auto& [index, power] : q.powers) {
+      const std::string& name = estimates[index].name;
+      value *= truth.parameters.Has(name) ? std::pow(truth.parameters.Value(name), power) : NAN;
+    }
+    (*p)[q.name] = Entry(q.value, q.std, std::isfinite(q.std), Number(value));
+  }
+}
+
 nlohmann::json OutputError(const StudySpec& spec, const Vehicle& start, const Vehicle& truth,
                            const RunLogs& logs) {
   const OutputErrorResult r = FitOutputError(start, logs.all, FitOptions(spec));
   if (!r.usable) return {{"ok", false}, {"error", r.why_not_usable}};
-  return {{"ok", true},
-          {"parameters", IdentifiabilityParameters(r.parameters, r.identifiability, truth)}};
+  nlohmann::json p = IdentifiabilityParameters(r.parameters, r.identifiability, truth);
+  AddRatios(r.ratios, r.parameters, truth, &p);
+  return {{"ok", true}, {"parameters", p}};
 }
 
 nlohmann::json Ekf(const Vehicle& start, const Vehicle& truth, const RunLogs& logs) {
@@ -91,6 +108,7 @@ nlohmann::json Ekf(const Vehicle& start, const Vehicle& truth, const RunLogs& lo
     p[r.free_names[k]] =
         Entry(r.estimate[k], r.estimate_std[k], r.identifiable[k], Truth(truth, r.free_names[k]));
   }
+  AddRatios(r.ratios, r.parameters, truth, &p);
   return {{"ok", true}, {"parameters", p}};
 }
 
@@ -104,11 +122,10 @@ nlohmann::json DiscoverRun(const StudySpec& spec, const Vehicle& start, const Ve
   const DiscoveryResult r = Discover(start, logs.all, {}, o);
   nlohmann::json unexplained = nlohmann::json::array();
   for (const UnexplainedChannel& u : r.unexplained) unexplained.push_back(u.channel);
-  return {{"ok", true},
-          {"added", r.added},
-          {"unexplained", unexplained},
-          {"parameters", IdentifiabilityParameters(r.final.result.parameters,
-                                                   r.final.result.identifiability, truth)}};
+  nlohmann::json p = IdentifiabilityParameters(r.final.result.parameters,
+                                               r.final.result.identifiability, truth);
+  AddRatios(r.final.result.ratios, r.final.result.parameters, truth, &p);
+  return {{"ok", true}, {"added", r.added}, {"unexplained", unexplained}, {"parameters", p}};
 }
 
 }  // namespace
