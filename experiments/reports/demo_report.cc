@@ -184,8 +184,9 @@ std::string DemoReportMarkdown(const DemoRecord& r) {
                 {"fit_flight", "validation_flight", "fit_"});
   MethodSection(o, r, "ekf", "4. Extended Kalman filter (ekf)",
                 "States and parameters together from the flight log (continuous-discrete EKF, "
-                "RTS smoother, a covariance pass at the estimates); d is held at the config's "
-                "value because flight logs alone fix only ratios (model.md decision 8).",
+                "RTS smoother, a covariance pass at the estimates). Flight logs alone fix only "
+                "ratios (model.md decision 8), so ekf starts d from output_error's estimate "
+                "and std (fixed by the balance log) as a prior.",
                 {"parameters", "fit", "innovations"});
 
   o << "\n## 5. The three compared (`coaxid compare`)\n\nReport paths in this section's tables are "
