@@ -491,12 +491,6 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
   return out;
 }
 
-std::string Join(const std::vector<std::string>& names) {
-  std::string list;
-  for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-  return list;
-}
-
 }  // namespace
 
 EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
