@@ -73,12 +73,7 @@ std::string ApplyInitialReport(const std::string& path, Vehicle* vehicle, EkfOpt
   for (const ReportedParameter& r : ReadReportedParameters(path)) {
     const int i = vehicle->parameters.Index(r.name);
     if (i < 0 || !vehicle->parameters[i].estimated) continue;
-    const Parameter& p = vehicle->parameters[i];
-    if (!(std::isfinite(r.value) && r.value >= p.lower && r.value <= p.upper)) {
-      throw InputError(path + ": parameters." + r.name + ".value = " + std::to_string(r.value) +
-                       " is outside the config's bounds [" + std::to_string(p.lower) + ", " +
-                       std::to_string(p.upper) + "]");
-    }
+    CheckWithinConfigBounds(path, r, vehicle->parameters[i]);
     vehicle->parameters.SetValue(r.name, r.value);
     if (std::isfinite(r.std) && r.std > 0) options->initial_parameter_std_by_name[r.name] = r.std;
     ++used;

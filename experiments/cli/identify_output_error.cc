@@ -144,7 +144,8 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
   if (!prior_note.empty()) notes.push_back(prior_note);
   if (FLAGS_start == "linear_kf") notes.push_back(StartFromBaseline(logs, &vehicle));
 
-  std::fprintf(stderr, "identify: output_error on %zu log(s), %zu free parameter(s)\n",
+  std::fprintf(stderr,
+               "identify: output_error on %zu log(s), %zu parameter(s) estimated in the config\n",
                split.estimation.size(), vehicle.parameters.FreeIndices().size());
   const OutputErrorResult result = FitOutputError(vehicle, split.estimation, options);
   if (!result.usable) throw ComputationError(result.why_not_usable);

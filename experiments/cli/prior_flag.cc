@@ -34,6 +34,15 @@ std::vector<ReportedParameter> ReadReportedParameters(const std::string& path) {
   return out;
 }
 
+void CheckWithinConfigBounds(const std::string& path, const ReportedParameter& r,
+                             const Parameter& p) {
+  if (!(std::isfinite(r.value) && r.value >= p.lower && r.value <= p.upper)) {
+    throw InputError(path + ": parameters." + r.name + ".value = " + std::to_string(r.value) +
+                     " is outside the config's bounds [" + std::to_string(p.lower) + ", " +
+                     std::to_string(p.upper) + "]");
+  }
+}
+
 std::vector<ParameterPrior> ReadPriorFlag(const std::string& spec,
                                           const ParameterSet& parameters,
                                           std::string* description) {
@@ -56,12 +65,7 @@ std::vector<ParameterPrior> ReadPriorFlag(const std::string& spec,
   };
   std::vector<ParameterPrior> priors;
   auto add = [&](const ReportedParameter& r) {
-    const Parameter& p = parameters.Get(r.name);
-    if (!(std::isfinite(r.value) && r.value >= p.lower && r.value <= p.upper)) {
-      throw InputError(path + ": parameters." + r.name + ".value = " + std::to_string(r.value) +
-                       " is outside the config's bounds [" + std::to_string(p.lower) + ", " +
-                       std::to_string(p.upper) + "]");
-    }
+    CheckWithinConfigBounds(path, r, parameters.Get(r.name));
     priors.push_back({r.name, r.value, r.std});
   };
   for (const std::string& name : names) {

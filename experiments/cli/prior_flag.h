@@ -23,6 +23,11 @@ struct ReportedParameter {
 // InputError (naming the file) if it is not a report.json.
 std::vector<ReportedParameter> ReadReportedParameters(const std::string& path);
 
+// Throws InputError (naming path and parameter) unless r.value is finite and
+// within the config parameter p's bounds.
+void CheckWithinConfigBounds(const std::string& path, const ReportedParameter& r,
+                             const Parameter& p);
+
 // --prior=REPORT.json[:name,name...]. Without names: every parameter the
 // report gives with a std > 0 that the config estimates. Named ones must
 // have both there (InputError says which does not). Values must lie within
