@@ -146,6 +146,7 @@ ScaleGauge FixScaleGauge(const VehicleModel& model, const std::vector<Estimation
     gauge.note = group_note + " A balance log in the fit measures the moments and fixes the scale.";
   } else if (!held_by_config.empty()) {
     gauge.fixed_by = "config: " + Join(held_by_config) + " held";
+    if (held_by_config.size() == 1) gauge.held_member = held_by_config[0];
     gauge.note = group_note + " The scale is fixed by " + Join(held_by_config) +
                  " (estimated: false in the config).";
   } else if (!with_prior.empty()) {
@@ -156,6 +157,7 @@ ScaleGauge FixScaleGauge(const VehicleModel& model, const std::vector<Estimation
     const char* d = BaseParameterName(kHubDistance);
     parameters->SetEstimated(d, false);
     gauge.held = d;
+    gauge.held_member = d;
     gauge.fixed_by = "held: d";
     char value[32];
     std::snprintf(value, sizeof value, "%g m", parameters->Value(d));

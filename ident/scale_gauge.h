@@ -70,6 +70,10 @@ struct ScaleGauge {
   // "held: d" (this gauge held it), or "nothing" (kNone, flight logs alone).
   std::string fixed_by;
   std::string held;  // the parameter this gauge held for the scale ("d"), or empty
+  // The one held member whose value alone sets the scale (`held`, or the
+  // config's only held member), or empty. An estimator may solve with it
+  // free and then move the solution along the scale back to its value.
+  std::string held_member;
   std::string note;  // for people
   nlohmann::json ToJson() const;
 };

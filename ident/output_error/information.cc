@@ -207,4 +207,19 @@ ColouredResidualCorrection CorrectForColouredResiduals(const OutputErrorInformat
   return out;
 }
 
+void DropParameter(int k, OutputErrorInformation* info) {
+  auto drop_column = [k](Eigen::MatrixXd* m) {
+    const Eigen::Index n = m->cols() - 1;
+    m->middleCols(k, n - k) = m->rightCols(n - k).eval();
+    m->conservativeResize(Eigen::NoChange, n);
+  };
+  Eigen::MatrixXd& M = info->information;
+  drop_column(&M);
+  M.transposeInPlace();
+  drop_column(&M);
+  for (OutputErrorInformation::FlightRows& rows : info->flight) {
+    if (rows.sensitivities.cols() > k) drop_column(&rows.sensitivities);
+  }
+}
+
 }  // namespace coaxid

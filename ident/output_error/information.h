@@ -58,6 +58,10 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
                                                      const double* theta_scaled, int P,
                                                      bool keep_flight_rows);
 
+// The information with parameter k held fixed: its row and column (and its
+// column of the flight sensitivities) removed.
+void DropParameter(int k, OutputErrorInformation* info);
+
 struct ColouredResidualCorrection {
   Eigen::MatrixXd covariance_scaled;  // the corrected covariance, scaled coordinates
   std::vector<int> lags;              // per flight log, the truncation lag [samples]

@@ -278,6 +278,52 @@ std::vector<LogResidualBlocks> ResidualBlocks(const Vehicle& vehicle,
   return out;
 }
 
+// Position in solve_free of the one parameter free has not (the held one).
+int HeldPosition(const FreeParameters& free, const FreeParameters& solve_free) {
+  for (int k = 0; k < solve_free.size(); ++k) {
+    if (k >= free.size() || free.names()[k] != solve_free.names()[k]) return k;
+  }
+  LOG(FATAL) << "solve_free has no parameter free lacks";
+}
+
+// Moves a solution found with the scale free onto the gauge: every member of
+// the scale group times (held value / fitted value of the held parameter).
+// Along that direction every flight output, so the cost, is unchanged
+// (ident/scale_gauge.h), and segment states stay as they are. False, with
+// the reason, when a member would leave its bounds.
+bool OntoTheGauge(const ScaleGauge& gauge, const ParameterSet& held_parameters,
+                  const FreeParameters& solve_free, Eigen::VectorXd* theta_scaled,
+                  std::string* why) {
+  const Eigen::VectorXd theta = solve_free.Theta(theta_scaled->data());
+  const std::string& name = gauge.held_member;
+  const double factor = held_parameters.Value(name) / theta[held_parameters.Index(name)];
+  const std::vector<int>& group = gauge.direction.group;
+  for (int k = 0; k < solve_free.size(); ++k) {
+    const int i = solve_free.indices()[k];
+    if (std::find(group.begin(), group.end(), i) == group.end()) continue;
+    const double value = (*theta_scaled)[k] * factor;
+    if (value < solve_free.ScaledLower()[k] || value > solve_free.ScaledUpper()[k]) {
+      const Parameter& p = held_parameters[i];
+      char line[320];
+      std::snprintf(line, sizeof line,
+                    "with %s held at %g for the scale, %s would be %g, outside its bounds "
+                    "[%g, %g]: widen them in the config or give a prior on %s (--prior)",
+                    name.c_str(), held_parameters.Value(name), p.name.c_str(),
+                    value * solve_free.scales()[k], p.lower, p.upper, name.c_str());
+      *why = line;
+      return false;
+    }
+    (*theta_scaled)[k] = value;
+  }
+  return true;
+}
+
+void DropEntry(int k, Eigen::VectorXd* v) {
+  const Eigen::Index n = v->size() - 1;
+  v->segment(k, n - k) = v->tail(n - k).eval();
+  v->conservativeResize(n);
+}
+
 }  // namespace
 
 nlohmann::json OutputErrorResult::ColouredResiduals::ToJson(
@@ -338,6 +384,19 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   result.parameters = vehicle.parameters;
   const FreeParameters free(vehicle.parameters);
   if (free.size() == 0) throw InputError("no parameter is marked estimated in the config");
+  // The solves run with the scale free even when one member (d) is held:
+  // held,
+  // the scale direction is cut out of the search space and Levenberg-
+  // Marquardt, from a nominal start, can stop in a wrong basin (measured in
+  // bench/ident/output_error/flight_only_bench: ratios off by up to 50 std
+  // after ~60 s, where the same fit with the scale free converges in 12
+  // iterations). The cost is invariant along the scale, so the solution is
+  // moved onto the gauge afterwards at no change in cost (OntoTheGauge).
+  ParameterSet solve_parameters = vehicle.parameters;
+  if (!result.gauge.held_member.empty()) {
+    solve_parameters.SetEstimated(result.gauge.held_member, true);
+  }
+  const FreeParameters solve_free(solve_parameters);
   for (const EstimationLog& log : logs) {
     if (log.kind == LogKind::kFlight &&
         (log.ChannelColumn(kPhi) < 0 || log.ChannelColumn(kP) < 0)) {
@@ -345,7 +404,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     }
   }
   NoiseWeights noise = options.noise.std.empty() ? NoiseFromData(logs) : options.noise;
-  Eigen::VectorXd theta_scaled = free.ScaledValues();
+  Eigen::VectorXd theta_scaled = solve_free.ScaledValues();
 
   ceres::Solver::Options solver_options;
   // Multiple shooting has the structure of bundle adjustment: many small
@@ -422,7 +481,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
         stage_options.continuity_std = options.coarse_continuity_std;
         stage_options.integrator = options.coarse_integrator;
       }
-      a = Assemble(vehicle, free, logs, noise, segment_s, stage_options, theta_scaled.data(),
+      a = Assemble(vehicle, solve_free, logs, noise, segment_s, stage_options, theta_scaled.data(),
                    start_state, /*tie_segments=*/true, &times);
     }
     char stage_name[96];
@@ -456,7 +515,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
       result.why_not_usable = std::string(stage_name) + ": the solver failed: " + summary.message;
       return result;
     }
-    if (!Predict(vehicle, free, logs, a, theta_scaled.data(), &previous_predictions)) {
+    if (!Predict(vehicle, solve_free, logs, a, theta_scaled.data(), &previous_predictions)) {
       result.usable = false;
       result.why_not_usable = std::string(stage_name) +
                               ": the model cannot be simulated at the solution (CVODE failed)";
@@ -466,10 +525,21 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     have_previous = true;
   }
 
+  const int held = solve_free.size() > free.size() ? HeldPosition(free, solve_free) : -1;
+  if (held >= 0 && !OntoTheGauge(result.gauge, vehicle.parameters, solve_free, &theta_scaled,
+                                 &result.why_not_usable)) {
+    return result;
+  }
   const auto covariance_start = Clock::now();
-  OutputErrorInformation information =
-      ComputeOutputErrorInformation(ResidualBlocks(vehicle, logs, previous), theta_scaled.data(),
-                                    free.size(), options.coloured_residual_correction);
+  // With d held, its row and column leave the information: what remains is
+  // the information on the other parameters with d fixed.
+  OutputErrorInformation information = ComputeOutputErrorInformation(
+      ResidualBlocks(vehicle, logs, previous), theta_scaled.data(), solve_free.size(),
+      options.coloured_residual_correction);
+  if (held >= 0) {
+    DropParameter(held, &information);
+    DropEntry(held, &theta_scaled);
+  }
   const ScaledPriorRows prior = PriorRows(options.priors, free.names(), free.scales());
   information.information.noalias() += prior.A.transpose() * prior.A;
   result.identifiability =

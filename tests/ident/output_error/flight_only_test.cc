@@ -151,5 +151,64 @@ TEST(FlightOnly, APriorOnDPropagatesIntoTheMembersOfTheScaleGroup) {
   }
 }
 
+// The solves run with the scale free and move the solution along the scale
+// onto the held member afterwards (FitOutputError). Whichever member holds
+// the scale (d by the gauge, Ixx by the config), the held member sits at
+// its held value, the ratios and their std are those of the fit with every
+// member free, and the model's outputs at the held solution are those at the
+// free one (the move leaves the cost unchanged).
+TEST(FlightOnly, WhicheverMemberHoldsTheScaleTheRatiosAndOutputsAreTheSame) {
+  const Vehicle nominal = Nominal();
+  const Vehicle truth = RandomTruth(nominal, 41);
+  const std::vector<EstimationLog> logs = {MakeEstimationLog(Flight(truth, 6.0, 501))};
+  OutputErrorOptions free_options = Options();
+  free_options.scale_anchor = ScaleAnchor::kNone;
+  const OutputErrorResult free = FitOutputError(nominal, logs, free_options);
+  const OutputErrorResult by_d = FitOutputError(nominal, logs, Options());
+  Vehicle ixx_held = nominal;
+  const double ixx = 1.2 * nominal.parameters.Value("Ixx");
+  ixx_held.parameters.SetValue("Ixx", ixx);
+  ixx_held.parameters.SetEstimated("Ixx", false);
+  const OutputErrorResult by_ixx = FitOutputError(ixx_held, logs, Options());
+  ASSERT_TRUE(free.usable && by_d.usable && by_ixx.usable);
+  EXPECT_EQ(by_d.gauge.held_member, "d");
+  EXPECT_EQ(by_d.parameters.Value("d"), nominal.parameters.Value("d"));
+  EXPECT_EQ(by_ixx.gauge.fixed_by, "config: Ixx held");
+  EXPECT_DOUBLE_EQ(by_ixx.parameters.Value("Ixx"), ixx);
+  EXPECT_TRUE(by_ixx.parameters.Get("d").estimated);
+  ASSERT_EQ(free.ratios.size(), 6u);
+  ASSERT_EQ(by_d.ratios.size(), 6u);
+  ASSERT_EQ(by_ixx.ratios.size(), 6u);
+  for (size_t k = 0; k < 6; ++k) {
+    // Same solves up to the move along the scale: ratios equal to rounding.
+    EXPECT_NEAR(by_d.ratios[k].value, free.ratios[k].value, 1e-3 * free.ratios[k].std)
+        << free.ratios[k].name;
+    EXPECT_NEAR(by_ixx.ratios[k].value, by_d.ratios[k].value, 1e-3 * by_d.ratios[k].std)
+        << by_d.ratios[k].name;
+    // The information at two points on one scale orbit: the same ratio std
+    // (the covariance is a pseudo-inverse for the free fit, an inverse for
+    // the held ones; the ratios are orthogonal to the orbit either way).
+    EXPECT_NEAR(by_d.ratios[k].std, free.ratios[k].std, 1e-3 * free.ratios[k].std)
+        << free.ratios[k].name;
+    EXPECT_NEAR(by_ixx.ratios[k].std, by_d.ratios[k].std, 1e-3 * by_d.ratios[k].std)
+        << by_d.ratios[k].name;
+  }
+  // Outputs at the held and the free solution, each with start states fitted
+  // on 1 s windows alone: the same to a small fraction of the noise.
+  auto predict = [&](const OutputErrorResult& fit) {
+    Vehicle v = nominal;
+    v.parameters = fit.parameters;
+    return PredictWithFixedParameters(v, logs, free.noise, 1.0, Options())[0];
+  };
+  const Eigen::MatrixXd at_free = predict(free), at_d = predict(by_d), at_ixx = predict(by_ixx);
+  for (int c = 0; c < logs[0].NumChannels(); ++c) {
+    const double noise = free.noise.For(logs[0].channel_names[c]);
+    EXPECT_LT((at_d.col(c) - at_free.col(c)).cwiseAbs().maxCoeff(), 0.01 * noise)
+        << logs[0].channel_names[c];
+    EXPECT_LT((at_ixx.col(c) - at_free.col(c)).cwiseAbs().maxCoeff(), 0.01 * noise)
+        << logs[0].channel_names[c];
+  }
+}
+
 }  // namespace
 }  // namespace coaxid
