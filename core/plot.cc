@@ -154,14 +154,68 @@ std::string Script(const Figure& figure, const std::string& data_name,
   return s;
 }
 
+// The rows of a series to write. A line (style "lines...") with x
+// non-decreasing and more than four points per pixel column of its panel is
+// drawn from the first, lowest, highest and last point of each pixel column,
+// in x order, and every gap (NaN): the same image, since a line cannot show
+// more, at a fraction of gnuplot's time (a 48 s, 200 Hz flight log's fit
+// figure: 9600 points per curve). Anything else is written whole.
+std::vector<size_t> RowsToDraw(const PlotSeries& series, int pixel_columns) {
+  const size_t n = std::min(series.x.size(), series.y.size());
+  std::vector<size_t> all(n);
+  for (size_t k = 0; k < n; ++k) all[k] = k;
+  if (series.style.rfind("lines", 0) != 0 || n <= 4 * static_cast<size_t>(pixel_columns)) {
+    return all;
+  }
+  for (size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(series.x[k])) return all;
+    if (k > 0 && series.x[k] < series.x[k - 1]) return all;
+  }
+  const double x0 = series.x.front(), x1 = series.x[n - 1];
+  if (!(x1 > x0)) return all;
+  std::vector<size_t> rows;
+  long column = -1;
+  size_t first = 0, low = 0, high = 0, last = 0;
+  bool open = false;
+  auto flush = [&] {
+    if (!open) return;
+    std::vector<size_t> picked = {first, low, high, last};
+    std::sort(picked.begin(), picked.end());
+    picked.erase(std::unique(picked.begin(), picked.end()), picked.end());
+    rows.insert(rows.end(), picked.begin(), picked.end());
+    open = false;
+  };
+  for (size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(series.y[k])) {
+      flush();
+      rows.push_back(k);  // the gap
+      continue;
+    }
+    const long c = static_cast<long>((series.x[k] - x0) / (x1 - x0) * pixel_columns);
+    if (!open || c != column) {
+      flush();
+      column = c;
+      first = low = high = last = k;
+      open = true;
+      continue;
+    }
+    last = k;
+    if (series.y[k] < series.y[low]) low = k;
+    if (series.y[k] > series.y[high]) high = k;
+  }
+  flush();
+  return rows;
+}
+
 std::string Data(const Figure& figure) {
   std::string d;
   int block = 0;
+  const int pixel_columns = figure.width_px / std::max(1, figure.columns);
   for (const PlotPanel& panel : figure.panels) {
     for (const PlotSeries& series : panel.series) {
       d += "# block " + std::to_string(block++) + ": " + panel.title + " / " + series.title + "\n";
       const size_t n = std::min(series.x.size(), series.y.size());
-      for (size_t k = 0; k < n; ++k) {
+      for (size_t k : RowsToDraw(series, pixel_columns)) {
         d += FormatNumber(series.x[k]);
         d += ' ';
         d += FormatNumber(series.y[k]);

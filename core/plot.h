@@ -39,7 +39,9 @@ struct Figure {
   int height_px = 0;  // 0: 320 px per row of panels
 };
 
-// Writes STEM.dat (the series) and STEM.gp (the script; rerun it with
+// Writes STEM.dat (the series; a long line only as the first, lowest,
+// highest and last point of each pixel column, which draws the same image)
+// and STEM.gp (the script; rerun it with
 // `gnuplot STEM.gp` to tweak a figure), where STEM is png_path without its
 // ".png", and runs gnuplot to make png_path (terminal pngcairo, or png where
 // cairo is missing). Returns false with *error set when gnuplot is not

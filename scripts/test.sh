@@ -16,7 +16,7 @@ if [ "${1:-}" = "--sanitize" ]; then
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   cd "$here/build-asan"
   # Many fits each (minutes under the sanitizers, 10-50 s in Release).
-  SANITIZE_SKIP='^FlightOnly\.|^DiscoverFlight\.RotorDragIsFoundInFastTransits$|^DiscoverFlight\.TwoEffectsAreBothFound$'
+  SANITIZE_SKIP='^FlightOnly\.|^EkfStart\.|^DiscoverFlight\.RotorDragIsFoundInFastTransits$|^DiscoverFlight\.TwoEffectsAreBothFound$'
   ctest --output-on-failure -j"$(nproc)" -E "$SANITIZE_SKIP"
   exit 0
 elif [ "${1:-}" = "--mpi" ]; then

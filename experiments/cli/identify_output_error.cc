@@ -1,5 +1,6 @@
 #include "experiments/cli/identify_output_error.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -20,6 +21,7 @@
 #include "experiments/cli/prior_flag.h"
 #include "ident/baseline/balance_holds.h"
 #include "ident/baseline/linear_baseline.h"
+#include "ident/ekf/ekf_start.h"
 #include "ident/output_error/output_error.h"
 
 DEFINE_double(segment_s, 1.0,
@@ -33,9 +35,11 @@ DEFINE_string(noise_std, "",
 DEFINE_bool(coloured_residuals, false,
             "output_error: correct the Cramér-Rao std for autocorrelated output residuals "
             "(Morelli & Klein); report.json says which std and by what factor");
-DEFINE_string(start, "config",
-              "output_error: starting values: config, or linear_kf (the paper's baseline on the "
-              "balance logs)");
+DEFINE_string(start, "auto",
+              "output_error: starting values: config (then a coarse 0.25 s stage before "
+              "--segment_s), linear_kf (the paper's baseline on the balance logs), ekf (one EKF "
+              "pass over the first 20 s of the flight logs, then straight at --segment_s), or "
+              "auto (ekf when the logs hold a flight log, else config)");
 
 namespace coaxid {
 namespace {
@@ -45,7 +49,8 @@ using Clock = std::chrono::steady_clock;
 
 constexpr const char* kOutputErrorUsage =
     "usage: coaxid identify --method=output_error --logs=A.csv[,B.csv] --config=F --out=DIR "
-    "[--validate=C.csv] [--holdout_fraction=0.2] [--segment_s=1] [--start=config|linear_kf] "
+    "[--validate=C.csv] [--holdout_fraction=0.2] [--segment_s=1] "
+    "[--start=auto|config|linear_kf|ekf] "
     "[--prior=R.json[:name,...]]";
 
 // Starting values from the paper's linear baseline on the balance logs.
@@ -71,6 +76,31 @@ std::string StartFromBaseline(const std::vector<Log>& logs, Vehicle* vehicle) {
   set("sigma0", r.thrust_map.sigma0);
   return "starting values of alpha, beta, gamma1, gamma2 and sigma0 from the linear_kf baseline "
          "on the balance logs; the others from the config";
+}
+
+// Starting values from a short EKF pass (ident/ekf/ekf_start.h); the fit
+// then needs no coarse stage. Falls back to the config's values (and the
+// coarse-to-fine schedule) when the logs hold no flight log or the pass
+// fails, unless --start=ekf asked for it explicitly.
+std::string StartFromEkf(const std::vector<EstimationLog>& logs, Vehicle* vehicle,
+                         OutputErrorOptions* options) {
+  const bool any_flight = std::any_of(logs.begin(), logs.end(), [](const EstimationLog& log) {
+    return log.kind == LogKind::kFlight;
+  });
+  if (!any_flight && FLAGS_start == "auto") return "starting values from the config";
+  const EkfStart start = StartFromEkfPass(*vehicle, logs);
+  if (!start.usable) {
+    if (FLAGS_start == "ekf") throw ComputationError("--start=ekf: " + start.note);
+    std::fprintf(stderr, "identify: %s; starting from the config\n", start.note.c_str());
+    return start.note + "; starting values from the config";
+  }
+  std::fprintf(stderr, "identify: %s\n", start.note.c_str());
+  vehicle->parameters = start.parameters;
+  options->segment_schedule_s = {options->segment_schedule_s.back()};
+  char then[64];
+  std::snprintf(then, sizeof then, ", then the fit at %g s segments",
+                options->segment_schedule_s.back());
+  return start.note + then;
 }
 
 void PrintEstimates(const OutputErrorResult& result) {
@@ -99,8 +129,9 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
   RequireFlag(run.config, "config", kOutputErrorUsage);
   RequireFlag(run.out, "out", kOutputErrorUsage);
   CheckHoldoutFraction(run.holdout_fraction);
-  if (FLAGS_start != "config" && FLAGS_start != "linear_kf") {
-    throw InputError("--start must be config or linear_kf, got '" + FLAGS_start + "'");
+  if (FLAGS_start != "auto" && FLAGS_start != "config" && FLAGS_start != "linear_kf" &&
+      FLAGS_start != "ekf") {
+    throw InputError("--start must be auto, config, linear_kf or ekf, got '" + FLAGS_start + "'");
   }
   CheckOutputFolder(run.out);
   Vehicle vehicle = LoadVehicle(run.config);
@@ -143,6 +174,9 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
   options.priors = ReadPriorFlag(run.prior, vehicle.parameters, &prior_note);
   if (!prior_note.empty()) notes.push_back(prior_note);
   if (FLAGS_start == "linear_kf") notes.push_back(StartFromBaseline(logs, &vehicle));
+  if (FLAGS_start == "ekf" || FLAGS_start == "auto") {
+    notes.push_back(StartFromEkf(split.estimation, &vehicle, &options));
+  }
 
   std::fprintf(stderr,
                "identify: output_error on %zu log(s), %zu parameter(s) estimated in the config\n",
@@ -158,6 +192,8 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
 
   if (!result.gauge.note.empty()) notes.push_back(result.gauge.note);
 
+  std::fprintf(stderr, "identify: validated (elapsed %.1f s); writing plots ...\n",
+               SecondsSince(start));
   // Everything is known: only now write.
   const std::string dir = run.out;
   MakeOutputFolder(dir + "/plots");

@@ -207,6 +207,16 @@ ColouredResidualCorrection CorrectForColouredResiduals(const OutputErrorInformat
   return out;
 }
 
+void RescaleParameters(const Eigen::VectorXd& factors, OutputErrorInformation* info) {
+  const Eigen::VectorXd inverse = factors.cwiseInverse();
+  info->information = inverse.asDiagonal() * info->information * inverse.asDiagonal();
+  for (OutputErrorInformation::FlightRows& rows : info->flight) {
+    if (rows.sensitivities.cols() == inverse.size()) {
+      rows.sensitivities = rows.sensitivities * inverse.asDiagonal();
+    }
+  }
+}
+
 void DropParameter(int k, OutputErrorInformation* info) {
   auto drop_column = [k](Eigen::MatrixXd* m) {
     const Eigen::Index n = m->cols() - 1;

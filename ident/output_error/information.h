@@ -58,6 +58,11 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
                                                      const double* theta_scaled, int P,
                                                      bool keep_flight_rows);
 
+// The information in the coordinates theta'_k = factors_k theta_k, for a
+// model whose outputs at theta' equal those at theta (a move along an
+// invariance): Jacobian columns divided by the factors.
+void RescaleParameters(const Eigen::VectorXd& factors, OutputErrorInformation* info);
+
 // The information with parameter k held fixed: its row and column (and its
 // column of the flight sensitivities) removed.
 void DropParameter(int k, OutputErrorInformation* info);

@@ -32,6 +32,7 @@ bool OutputErrorOptions::IsValid(std::string* why) const {
     return fail("max_iterations must be >= 1");
   }
   if (noise_relaxations < 0) return fail("noise_relaxations must be >= 0");
+  if (!(noise_relaxation_tolerance >= 0)) return fail("noise_relaxation_tolerance must be >= 0");
   if (!(continuity_std > 0 && coarse_continuity_std > 0)) {
     return fail("continuity_std must be positive");
   }
@@ -278,6 +279,15 @@ std::vector<LogResidualBlocks> ResidualBlocks(const Vehicle& vehicle,
   return out;
 }
 
+// max over channels of |new std / old std - 1|.
+double MaxRelativeChange(const NoiseWeights& old_noise, const NoiseWeights& new_noise) {
+  double change = 0;
+  for (const auto& [name, std] : new_noise.std) {
+    change = std::max(change, std::fabs(std / old_noise.For(name) - 1));
+  }
+  return change;
+}
+
 // Position in solve_free of the one parameter free has not (the held one).
 int HeldPosition(const FreeParameters& free, const FreeParameters& solve_free) {
   for (int k = 0; k < solve_free.size(); ++k) {
@@ -286,22 +296,24 @@ int HeldPosition(const FreeParameters& free, const FreeParameters& solve_free) {
   LOG(FATAL) << "solve_free has no parameter free lacks";
 }
 
-// Moves a solution found with the scale free onto the gauge: every member of
-// the scale group times (held value / fitted value of the held parameter).
-// Along that direction every flight output, so the cost, is unchanged
-// (ident/scale_gauge.h), and segment states stay as they are. False, with
-// the reason, when a member would leave its bounds.
-bool OntoTheGauge(const ScaleGauge& gauge, const ParameterSet& held_parameters,
-                  const FreeParameters& solve_free, Eigen::VectorXd* theta_scaled,
-                  std::string* why) {
-  const Eigen::VectorXd theta = solve_free.Theta(theta_scaled->data());
+// The move of a solution found with the scale free onto the gauge: every
+// member of the scale group times (held value / fitted value of the held
+// parameter), as per-parameter factors on solve_free's entries. Along that
+// move every flight output, so the cost, is unchanged (ident/scale_gauge.h)
+// and segment states stay as they are. False, with the reason, when a member
+// would leave its bounds.
+bool MoveOntoTheGauge(const ScaleGauge& gauge, const ParameterSet& held_parameters,
+                      const FreeParameters& solve_free, const Eigen::VectorXd& theta_scaled,
+                      Eigen::VectorXd* factors, std::string* why) {
+  const Eigen::VectorXd theta = solve_free.Theta(theta_scaled.data());
   const std::string& name = gauge.held_member;
   const double factor = held_parameters.Value(name) / theta[held_parameters.Index(name)];
   const std::vector<int>& group = gauge.direction.group;
+  *factors = Eigen::VectorXd::Ones(solve_free.size());
   for (int k = 0; k < solve_free.size(); ++k) {
     const int i = solve_free.indices()[k];
     if (std::find(group.begin(), group.end(), i) == group.end()) continue;
-    const double value = (*theta_scaled)[k] * factor;
+    const double value = theta_scaled[k] * factor;
     if (value < solve_free.ScaledLower()[k] || value > solve_free.ScaledUpper()[k]) {
       const Parameter& p = held_parameters[i];
       char line[320];
@@ -313,7 +325,7 @@ bool OntoTheGauge(const ScaleGauge& gauge, const ParameterSet& held_parameters,
       *why = line;
       return false;
     }
-    (*theta_scaled)[k] = value;
+    (*factors)[k] = factor;
   }
   return true;
 }
@@ -454,7 +466,20 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
       for (size_t i = 0; i < logs.size(); ++i) {
         residuals.push_back(logs[i].values - previous_predictions[i]);
       }
-      noise = NoiseFromResiduals(logs, residuals);
+      const NoiseWeights relaxed = NoiseFromResiduals(logs, residuals);
+      const double change = MaxRelativeChange(noise, relaxed);
+      if (options.progress) {
+        char line[160];
+        std::snprintf(line, sizeof line,
+                      "output-error relaxation: noise std changed by up to %.1f %% (stop below "
+                      "%.1f %%)",
+                      100 * change, 100 * options.noise_relaxation_tolerance);
+        options.progress(line);
+      }
+      // Converged weights: another solve would move the estimates by a small
+      // fraction of their std.
+      if (change < options.noise_relaxation_tolerance) break;
+      noise = relaxed;
       a = std::move(previous);
       SetNoise(logs, noise, &a);
     } else {
@@ -526,17 +551,23 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   }
 
   const int held = solve_free.size() > free.size() ? HeldPosition(free, solve_free) : -1;
-  if (held >= 0 && !OntoTheGauge(result.gauge, vehicle.parameters, solve_free, &theta_scaled,
-                                 &result.why_not_usable)) {
+  Eigen::VectorXd move;
+  if (held >= 0 && !MoveOntoTheGauge(result.gauge, vehicle.parameters, solve_free, theta_scaled,
+                                     &move, &result.why_not_usable)) {
     return result;
   }
   const auto covariance_start = Clock::now();
-  // With d held, its row and column leave the information: what remains is
-  // the information on the other parameters with d fixed.
+  // The information at the solve's end point (the segments' cached
+  // simulations serve it), then carried along the move: the outputs at
+  // move * theta are those at theta, so the Jacobian columns are divided by
+  // the move. With d held, its row and column then leave the information:
+  // what remains is the information on the others with d fixed.
   OutputErrorInformation information = ComputeOutputErrorInformation(
       ResidualBlocks(vehicle, logs, previous), theta_scaled.data(), solve_free.size(),
       options.coloured_residual_correction);
   if (held >= 0) {
+    RescaleParameters(move, &information);
+    theta_scaled = theta_scaled.cwiseProduct(move);
     DropParameter(held, &information);
     DropEntry(held, &theta_scaled);
   }

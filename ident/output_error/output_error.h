@@ -42,6 +42,9 @@ struct OutputErrorOptions {
   double coarse_function_tolerance = 1e-4;
   // Re-estimate the noise std from the residuals and solve again this many times.
   int noise_relaxations = 2;
+  // ... stopping earlier once no channel's std changes by more than this
+  // fraction (the weights have converged).
+  double noise_relaxation_tolerance = 0.05;
   // Gaussian priors (ident/parameter_prior.h): the fit starts at their values
   // and adds (value - mean) / std residuals; on the scale group they fix the
   // scale.

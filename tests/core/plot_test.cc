@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <sstream>
 #include <string>
 
 #include "core/atomic_file.h"
@@ -65,6 +66,71 @@ TEST_F(PlotTest, MakesAPngWithItsDataAndScript) {
   }
   EXPECT_EQ(files, 3);
   EXPECT_NE(ReadFile((dir_ / "fig.gp").string()).find("it''s a test_1"), std::string::npos);
+}
+
+// A line with far more points than pixel columns is written as each pixel
+// column's first, lowest, highest and last point (and its gaps): every
+// extreme of the full series is in the data, in x order, with a fraction of
+// the rows. Points are written whole.
+TEST_F(PlotTest, LongLinesKeepEachPixelColumnsExtremes) {
+  if (!GnuplotAvailable()) GTEST_SKIP() << "gnuplot not installed";
+  Figure f;
+  f.width_px = 400;  // one panel: 400 pixel columns
+  PlotPanel panel;
+  PlotSeries line{"line", {}, {}, "lines"}, points{"points", {}, {}, "points"};
+  const int n = 40000;
+  for (int k = 0; k < n; ++k) {
+    line.x.push_back(k * 0.001);
+    // Fast noise-like wiggle on a slow sine, one spike and one gap.
+    double y = std::sin(k * 0.0005) + 0.1 * std::sin(k * 1.7);
+    if (k == 12345) y = 5.0;
+    if (k == 30000) y = std::numeric_limits<double>::quiet_NaN();
+    line.y.push_back(y);
+  }
+  points.x = {0, 1, 2};
+  points.y = {1, 2, 3};
+  panel.series = {line, points};
+  f.panels = {panel};
+  std::string error;
+  ASSERT_TRUE(RenderFigure(f, (dir_ / "long.png").string(), &error)) << error;
+  std::vector<std::vector<std::pair<double, double>>> blocks(1);
+  std::istringstream data(ReadFile((dir_ / "long.dat").string()));
+  std::string row;
+  int blank = 0;
+  while (std::getline(data, row)) {
+    if (row.empty()) {
+      if (++blank == 2 && !blocks.back().empty()) blocks.emplace_back();
+      continue;
+    }
+    blank = 0;
+    if (row[0] == '#') continue;
+    std::istringstream in(row);
+    std::string x, y;
+    in >> x >> y;
+    blocks.back().push_back({std::stod(x), y == "NaN" ? NAN : std::stod(y)});
+  }
+  ASSERT_GE(blocks.size(), 2u);
+  const auto& written = blocks[0];
+  EXPECT_LE(written.size(), 4u * 400 + 10);
+  EXPECT_GE(written.size(), 400u);
+  EXPECT_EQ(blocks[1].size(), 3u);
+  // x in order, first and last point kept, the spike and the gap kept.
+  for (size_t k = 1; k < written.size(); ++k) EXPECT_LE(written[k - 1].first, written[k].first);
+  EXPECT_DOUBLE_EQ(written.front().first, 0.0);
+  EXPECT_DOUBLE_EQ(written.back().first, (n - 1) * 0.001);
+  double max_y = -1e9, min_y = 1e9;
+  int gaps = 0;
+  for (const auto& [x, y] : written) {
+    if (std::isnan(y)) ++gaps;
+    else max_y = std::max(max_y, y), min_y = std::min(min_y, y);
+  }
+  EXPECT_EQ(gaps, 1);
+  EXPECT_DOUBLE_EQ(max_y, 5.0);
+  double full_min = 1e9;
+  for (double y : line.y) {
+    if (!std::isnan(y)) full_min = std::min(full_min, y);
+  }
+  EXPECT_NEAR(min_y, full_min, 1e-8);  // written with 9 significant digits
 }
 
 TEST_F(PlotTest, ReportsAMissingGnuplotInsteadOfFailing) {

@@ -18,21 +18,20 @@
 //    on the same truth vehicle.
 //
 // Benchmarks (Iterations(1): one fit takes seconds):
-//  - BM_FlightOnlyFit: the flight log alone, d held at the config's value
-//    here (model.md decision 8: from flight logs d, gamma1, gamma2, Ixx, Iyy,
-//    Izz share one unobservable scale; holding d fixes it), so the
-//    scale-free ratios d*beta/Ixx, gamma1/Izz, Iyy/Ixx, Izz/Ixx are compared
-//    with the truth's. Measured: from the nominal start the 0.25 s coarse
-//    stage stops after 3 iterations (coarse_function_tolerance 1e-4) in a
-//    wrong basin (sigma0 at its upper bound 0.2); the 1 s stages then hit
-//    max_iterations (100) twice: ~60 s, ratios off by 17-50 std.
-//  - BM_FlightOnlyFitFree: the same with d free too (ScaleAnchor::kNone):
-//    converges in 12 iterations, ratios within 1 std.
+//  - BM_FlightOnlyFit: the flight log alone from the config's values; the
+//    scale gauge holds d (model.md decision 8: from flight logs d, gamma1,
+//    gamma2, Ixx, Iyy, Izz share one unobservable scale), so the scale-free
+//    ratios d*beta/Ixx, gamma1/Izz, Iyy/Ixx, Izz/Ixx are compared with the
+//    truth's. (With d cut out of the solve this fit stopped in a wrong basin
+//    after ~60 s, ratios off by up to 50 std; FitOutputError now solves
+//    with the scale free and moves the solution onto the held d.)
+//  - BM_FlightOnlyFitFree: the same with d estimated too (ScaleAnchor::kNone).
 //  - BM_FlightPlusBalanceFit: flight + balance log, all twelve unknowns.
-//  - BM_FlightOnlyFitEkfStart: the levers that bring the flight-only fit
-//    under 2 s (see its comment).
+//  - BM_FlightOnlyFitEkfStart, BM_FlightPlusBalanceFitEkfStart: what
+//    `identify --method=output_error` does by default (--start=auto): a 20 s
+//    EKF pass, then the fit at 1 s segments only.
 // The first three start from the config's nominal values with default
-// OutputErrorOptions. Counters: solver iterations, wall seconds by kind
+// OutputErrorOptions (progress lines on stderr). Counters: solver iterations, wall seconds by kind
 // (result.timing split_seconds) and max |estimate - truth| / std over what
 // the logs determine. stderr: the full timing json, then per free parameter
 // estimate, truth, Cramér-Rao std and z = (estimate - truth) / std, and the
@@ -53,7 +52,7 @@
 #include "experiments/simulation/excitation.h"
 #include "experiments/simulation/scenario.h"
 #include "experiments/simulation/simulate_experiment.h"
-#include "ident/ekf/ekf.h"
+#include "ident/ekf/ekf_start.h"
 #include "ident/estimation_log.h"
 #include "ident/noise_weights.h"
 #include "ident/output_error/output_error.h"
@@ -233,43 +232,34 @@ double ReportAccuracy(const OutputErrorResult& result, const ParameterSet& truth
 }
 
 // How a benchmark starts the fit: from the config's nominal values, or from
-// a short EKF pass over the first ekf_seconds of the flight log (d anchored
-// at its config value, single pass, no smoother: a start, not a result).
+// a short EKF pass (ident/ekf/ekf_start.h) and then at 1 s segments only.
 struct FitSetup {
-  bool estimate_d = true;
   bool scale_fixed_by_data = false;  // a balance log fixes d and the moment scale
   OutputErrorOptions options;
-  double ekf_seconds = 0;            // > 0: EKF start
+  bool ekf_start = false;            // StartFromEkfPass (its default 20 s)
 };
 
 void RunFit(benchmark::State& state, const char* name, const std::vector<EstimationLog>& logs,
             const FitSetup& setup) {
   const BenchData& data = Data();
   Vehicle nominal = data.nominal;
-  if (!setup.estimate_d) nominal.parameters.SetEstimated("d", false);
-  std::vector<EstimationLog> ekf_logs;
-  if (setup.ekf_seconds > 0) {
-    const int rows = static_cast<int>(setup.ekf_seconds * 200) + 1;  // 200 Hz
-    ekf_logs = {MakeEstimationLog(data.flight_log, 0, rows)};
-  }
   OutputErrorResult result;
   double ekf_seconds = 0;
+  OutputErrorOptions options = setup.options;
+  options.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
   for (auto _ : state) {
     Vehicle start = nominal;
-    if (setup.ekf_seconds > 0) {
+    if (setup.ekf_start) {
       const auto ekf_start = std::chrono::steady_clock::now();
-      EkfOptions ekf;
-      ekf.covariance_pass = false;
-      ekf.smoother = false;
-      const EkfResult pass = RunEkf(start, ekf_logs, NoiseFromData(ekf_logs), ekf);
+      const EkfStart pass = StartFromEkfPass(start, logs);
       if (!pass.usable) {
-        state.SkipWithError(("EKF start: " + pass.failure).c_str());
+        state.SkipWithError(pass.note.c_str());
         return;
       }
-      start.parameters = pass.parameters;  // d stays anchored (not estimated)
+      start.parameters = pass.parameters;
       ekf_seconds = SecondsSince(ekf_start);
     }
-    result = FitOutputError(start, logs, setup.options);
+    result = FitOutputError(start, logs, options);
     if (!result.usable) {
       state.SkipWithError(result.why_not_usable.c_str());
       return;
@@ -279,7 +269,7 @@ void RunFit(benchmark::State& state, const char* name, const std::vector<Estimat
   for (const auto& [kind, seconds] : result.timing["split_seconds"].items()) {
     state.counters[kind + "_s"] = seconds.get<double>();
   }
-  if (setup.ekf_seconds > 0) state.counters["ekf_start_s"] = ekf_seconds;
+  if (setup.ekf_start) state.counters["ekf_start_s"] = ekf_seconds;
   std::fprintf(stderr, "%s: %s\n%s\n", name, result.termination.c_str(),
                result.timing.dump(1).c_str());
   state.counters["max_abs_z"] =
@@ -287,13 +277,10 @@ void RunFit(benchmark::State& state, const char* name, const std::vector<Estimat
 }
 
 void BM_FlightOnlyFit(benchmark::State& state) {
-  FitSetup setup;
-  setup.estimate_d = false;
-  RunFit(state, __func__, {Data().flight}, setup);
+  RunFit(state, __func__, {Data().flight}, FitSetup{});
 }
-// d free as well: without the scale gauge (FitOutputError's default holds d
-// for flight logs alone) the scale direction is a null direction of the
-// information and Levenberg-Marquardt's damping keeps the step off it.
+// Every member of the scale group estimated (ScaleAnchor::kNone): the scale
+// direction is a null direction of the information.
 void BM_FlightOnlyFitFree(benchmark::State& state) {
   FitSetup setup;
   setup.options.scale_anchor = ScaleAnchor::kNone;
@@ -304,25 +291,27 @@ void BM_FlightPlusBalanceFit(benchmark::State& state) {
   setup.scale_fixed_by_data = true;
   RunFit(state, __func__, {Data().flight, Data().balance}, setup);
 }
-// The levers measured for a <= 2 s flight-only fit, together (~1.2 s on an
-// idle 2-core machine against ~60 s for BM_FlightOnlyFit): start from a 20 s
-// EKF pass (~0.1 s; its estimates are within ~12 % of the truth, so the
-// coarse 0.25 s stage is not needed and the nominal start's wrong basin is
-// avoided), one solve at 1 s segments (2 iterations), no noise relaxation
-// (weights from the data's first differences: the same estimates within 0.1
-// std, std up to 1.6x larger than after the relaxations, i.e. conservative).
-void BM_FlightOnlyFitEkfStart(benchmark::State& state) {
+// `identify --method=output_error --start=ekf`: a 20 s EKF pass, then the
+// solve at 1 s segments (no coarse stage) and the noise relaxations.
+FitSetup EkfStartSetup() {
   FitSetup setup;
-  setup.estimate_d = false;
-  setup.ekf_seconds = 20;
+  setup.ekf_start = true;
   setup.options.segment_schedule_s = {1.0};
-  setup.options.noise_relaxations = 0;
-  RunFit(state, __func__, {Data().flight}, setup);
+  return setup;
+}
+void BM_FlightOnlyFitEkfStart(benchmark::State& state) {
+  RunFit(state, __func__, {Data().flight}, EkfStartSetup());
+}
+void BM_FlightPlusBalanceFitEkfStart(benchmark::State& state) {
+  FitSetup setup = EkfStartSetup();
+  setup.scale_fixed_by_data = true;
+  RunFit(state, __func__, {Data().flight, Data().balance}, setup);
 }
 BENCHMARK(BM_FlightOnlyFit)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_FlightOnlyFitFree)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_FlightPlusBalanceFit)->Iterations(1)->Unit(benchmark::kSecond);
 BENCHMARK(BM_FlightOnlyFitEkfStart)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_FlightPlusBalanceFitEkfStart)->Iterations(1)->Unit(benchmark::kSecond);
 
 }  // namespace
 }  // namespace coaxid

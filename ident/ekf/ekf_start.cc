@@ -1,0 +1,61 @@
+#include "ident/ekf/ekf_start.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "ident/ekf/ekf.h"
+#include "ident/noise_weights.h"
+
+namespace coaxid {
+namespace {
+
+// The rows of a log up to `seconds` after its first.
+EstimationLog FirstSeconds(const EstimationLog& log, double seconds) {
+  const std::vector<double>& t = log.inputs.times();
+  const int rows = static_cast<int>(
+      std::upper_bound(t.begin(), t.end(), t.front() + seconds) - t.begin());
+  if (rows >= log.NumRows()) return log;
+  EstimationLog part = log;
+  std::vector<InputVector> inputs;
+  for (int k = 0; k < rows; ++k) inputs.push_back(log.inputs.input(k));
+  part.inputs = InputHold(std::vector<double>(t.begin(), t.begin() + rows), std::move(inputs));
+  part.values = log.values.topRows(rows);
+  return part;
+}
+
+}  // namespace
+
+EkfStart StartFromEkfPass(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
+                          double seconds) {
+  EkfStart start;
+  start.parameters = vehicle.parameters;
+  std::vector<EstimationLog> flight;
+  for (const EstimationLog& log : logs) {
+    if (log.kind == LogKind::kFlight) flight.push_back(FirstSeconds(log, seconds));
+  }
+  if (flight.empty()) {
+    start.note = "no flight log for an EKF start";
+    return start;
+  }
+  EkfOptions options;
+  options.covariance_pass = false;
+  options.smoother = false;
+  const EkfResult pass = RunEkf(vehicle, flight, NoiseFromData(flight), options);
+  if (!pass.usable) {
+    start.note = "the EKF start failed (" + pass.failure + ")";
+    return start;
+  }
+  for (int i = 0; i < start.parameters.size(); ++i) {
+    Parameter& p = start.parameters.mutable_parameter(i);
+    if (p.estimated) p.value = std::clamp(pass.parameters[i].value, p.lower, p.upper);
+  }
+  char note[160];
+  std::snprintf(note, sizeof note,
+                "starting values from one EKF pass over the first %g s of the flight log(s)",
+                seconds);
+  start.note = note;
+  start.usable = true;
+  return start;
+}
+
+}  // namespace coaxid
