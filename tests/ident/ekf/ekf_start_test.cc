@@ -3,13 +3,13 @@
 // nominal start's coarse-to-fine schedule finds, on truth vehicles and noise
 // seeds the start was not tuned on.
 #include <cmath>
-#include <random>
 
 #include <gtest/gtest.h>
 
 #include "experiments/simulation/simulate_experiment.h"
 #include "ident/ekf/ekf_start.h"
 #include "ident/output_error/output_error.h"
+#include "tests/random_truth.h"
 
 namespace coaxid {
 namespace {
@@ -21,15 +21,7 @@ TEST(EkfStart, OneFineSolveLandsWhereCoarseToFineDoes) {
   flight.duration_s = 10;
   flight.excitation.start_s = 0;
   for (uint64_t seed : {61, 62, 63}) {
-    // Every unknown 10-30 % off the config, random signs.
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> size(0.10, 0.30);
-    std::bernoulli_distribution sign(0.5);
-    Vehicle truth = nominal;
-    for (const std::string& name : UnknownBaseParameterNames()) {
-      const double factor = 1 + (sign(rng) ? 1 : -1) * size(rng);
-      truth.parameters.SetValue(name, nominal.parameters.Value(name) * factor);
-    }
+    const Vehicle truth = RandomTruth(nominal, seed);
     const std::vector<EstimationLog> logs = {
         MakeEstimationLog(SimulateFlight(truth, flight, seed + 1000))};
 

@@ -3,30 +3,17 @@
 // truth vehicles it was not tuned on.
 #include <algorithm>
 #include <cmath>
-#include <random>
 
 #include <gtest/gtest.h>
 
 #include "experiments/simulation/simulate_experiment.h"
 #include "ident/output_error/output_error.h"
+#include "tests/random_truth.h"
 
 namespace coaxid {
 namespace {
 
 Vehicle Nominal() { return LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml"); }
-
-// A truth vehicle: every unknown of the config 10-30 % off, random signs.
-Vehicle RandomTruth(const Vehicle& nominal, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> size(0.10, 0.30);
-  std::bernoulli_distribution sign(0.5);
-  Vehicle truth = nominal;
-  for (const std::string& name : UnknownBaseParameterNames()) {
-    const double factor = 1 + (sign(rng) ? 1 : -1) * size(rng);
-    truth.parameters.SetValue(name, nominal.parameters.Value(name) * factor);
-  }
-  return truth;
-}
 
 // A closed-loop flight with multisine excitation on all four inputs; the
 // controller is trimmed on the truth it flies.
