@@ -20,6 +20,9 @@
 DEFINE_double(alpha, 0.01,
               "discover: significance level of the candidate tests (family-wise per round, Holm)");
 DEFINE_int32(max_added, 4, "discover: add at most this many effects");
+DEFINE_double(min_share_of_excess, 0.3,
+              "discover: the least share of its channels' excess error (rms^2 - noise^2) an "
+              "effect must remove, on the estimation and the held-out data, to be added");
 DECLARE_double(segment_s);
 
 namespace coaxid {
@@ -113,7 +116,7 @@ std::string FitTable(const DiscoveryResult& r, bool has_validation) {
 
 std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::string>& logs,
                            const std::string& validation, const std::vector<std::string>& plots,
-                           const std::string& plot_error) {
+                           const std::string& plot_error, const DiscoveryOptions& options) {
   const bool has_validation = !r.baseline.validation.empty();
   std::ostringstream o;
   o << "# coaxid discover: what the declared model lacks\n\n";
@@ -132,24 +135,39 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
     for (const std::string& e : r.added) o << "**" << e << "** ";
     o << "\n";
   }
+  if (!r.symptoms.empty()) {
+    o << "\nDeclared parameters the declared fit left at a bound (a symptom of a missing effect):\n\n";
+    for (const BoundSymptom& b : r.symptoms) o << "- " << b.text << "\n";
+  }
   if (!r.unexplained.empty()) {
     o << "\nChannels whose residual is still structured and that no library effect explains:\n\n";
     for (const UnexplainedChannel& u : r.unexplained) o << "- **" << u.channel << "**: " << u.why << "\n";
   }
   o << "\n## Error per channel, before (declared model) and after\n\n" << FitTable(r, has_validation);
-  o << "\n## Candidates (score test linearised at the current fit, cluster-robust; "
-       "Holm-corrected p; the best passing one refitted and confirmed by a Wald test)\n\n";
-  o << "| round | effect | F | p | p (Holm) | white-noise p | passes | refit: Wald p | channels / "
-       "reason |\n|---|---|---|---|---|---|---|---|---|\n";
+  o << "\n## Candidates\n\nScore test linearised at the current fit (cluster-robust, "
+       "Holm-corrected p) to shortlist; the shortlisted ones refitted jointly and judged on the "
+       "refit: cluster-robust Wald p, no parameter at a bound, and the share of its channels' "
+       "excess error (rms^2 - noise^2) removed, at least "
+    << Num(100 * options.min_share_of_excess, "%.0f")
+    << " % on the estimation and the held-out data.\n\n";
+  o << "| round | effect | F | p | p (Holm) | predicted share | passes | refit: Wald p | share "
+       "removed (held out) | decision | channels / reason |\n"
+       "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const CandidateScore& s : r.candidates) {
     o << "| " << s.round << " | " << s.effect << " | "
       << (s.testable ? Num(s.statistic) : "-") << " | " << (s.testable ? Num(s.p_value, "%.3g") : "-")
       << " | " << (s.testable ? Num(s.p_corrected, "%.3g") : "-") << " | "
-      << (s.testable ? Num(s.white_p_value, "%.3g") : "-") << " | "
+      << (s.testable ? Num(s.predicted_share, "%.3g") : "-") << " | "
       << (!s.testable ? "not testable" : s.passes ? "yes" : "no") << " | "
-      << (!s.refitted ? "-"
-                      : Num(s.wald_p_value, "%.3g") + (s.confirmed ? " (confirmed)" : " (not confirmed)"))
-      << " | " << (s.testable ? s.reason : s.why_not_testable) << " |\n";
+      << (s.refitted ? Num(s.wald_p_value, "%.3g") : "-") << " | "
+      << (s.refitted ? Num(100 * s.share_of_excess, "%.1f") + " % (" +
+                           (std::isfinite(s.share_of_excess_held_out)
+                                ? Num(100 * s.share_of_excess_held_out, "%.1f") + " %"
+                                : std::string("-")) +
+                           ")"
+                     : "-")
+      << " | " << (!s.refitted ? "-" : s.confirmed ? "qualifies" : s.why_not_confirmed) << " | "
+      << (s.testable ? s.reason : s.why_not_testable) << " |\n";
   }
   bool any_generic = false;
   for (const UnexplainedChannel& u : r.unexplained) any_generic = any_generic || !u.generic.terms.empty();
@@ -225,6 +243,7 @@ int RunDiscover() {
   DiscoveryOptions options;
   options.alpha = FLAGS_alpha;
   options.max_added = FLAGS_max_added;
+  options.min_share_of_excess = FLAGS_min_share_of_excess;
   options.window_s = FLAGS_segment_s;
   options.fit.segment_schedule_s = {std::min(0.25, FLAGS_segment_s), FLAGS_segment_s};
   if (FLAGS_segment_s <= 0.25) options.fit.segment_schedule_s = {FLAGS_segment_s};
@@ -282,7 +301,7 @@ int RunDiscover() {
   std::vector<std::string> sources;
   for (const Log& log : logs) sources.push_back(log.source);
   WriteFileAtomically(dir + "/report.md",
-                      ReportMarkdown(r, sources, split.description, plots, plot_error));
+                      ReportMarkdown(r, sources, split.description, plots, plot_error, options));
 
   std::printf("discover: added %zu effect(s)", r.added.size());
   for (const std::string& e : r.added) std::printf(" %s", e.c_str());

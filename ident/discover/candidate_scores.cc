@@ -14,15 +14,75 @@
 namespace coaxid {
 namespace {
 
-// Channels of the logs whose output depends on the effect's parameters:
+// The effect's parameter names ("effect.param").
+std::vector<std::string> EffectParameterNames(const std::string& effect) {
+  std::vector<std::string> out;
+  for (const auto& spec : EffectLibrary()[EffectIndex(effect)].parameters) {
+    out.push_back(effect + "." + spec.name);
+  }
+  return out;
+}
+
+std::vector<std::string> AllParameterNames(const std::vector<std::string>& effects) {
+  std::vector<std::string> out;
+  for (const std::string& e : effects) {
+    for (const std::string& n : EffectParameterNames(e)) out.push_back(n);
+  }
+  return out;
+}
+
+// Holm's step-down correction over the testable scores: the i-th smallest
+// (0-based) of m p-values is compared with alpha / (m - i), kept monotone.
+void HolmCorrect(std::vector<CandidateScore>* scores, double alpha) {
+  std::vector<CandidateScore*> tested;
+  for (CandidateScore& s : *scores) {
+    if (s.testable) tested.push_back(&s);
+  }
+  std::sort(tested.begin(), tested.end(), [](const CandidateScore* a, const CandidateScore* b) {
+    if (a->p_value != b->p_value) return a->p_value < b->p_value;
+    return a->statistic > b->statistic;
+  });
+  const int m = static_cast<int>(tested.size());
+  double running = 0;
+  for (int i = 0; i < m; ++i) {
+    running = std::max(running, std::min(1.0, (m - i) * tested[i]->p_value));
+    tested[i]->p_corrected = running;
+    tested[i]->passes = running < alpha;
+  }
+}
+
+// The vehicle to linearise: what the fit held stays held (the scale member
+// of a flight-only fit, the parameters it left at a bound).
+Vehicle AsTheFitHeldIt(Vehicle v, const OutputErrorResult& fit) {
+  std::vector<std::string> held = ParametersAtBounds(fit.parameters);
+  if (!fit.gauge.held_member.empty()) held.push_back(fit.gauge.held_member);
+  for (const std::string& name : held) {
+    if (v.parameters.Has(name)) v.parameters.SetEstimated(name, false);
+  }
+  return v;
+}
+
+}  // namespace
+
+std::vector<std::string> ParametersAtBounds(const ParameterSet& parameters) {
+  std::vector<std::string> out;
+  for (int i : parameters.FreeIndices()) {
+    const Parameter& p = parameters[i];
+    const double tolerance = 1e-6 * (p.upper - p.lower);
+    if (p.value <= p.lower + tolerance || p.value >= p.upper - tolerance) out.push_back(p.name);
+  }
+  return out;
+}
+
 // |dy/dp| * scale above 1e-3 noise std at some sampled row.
-std::vector<std::string> ReachedChannels(const Vehicle& v, const std::string& effect,
-                                         const std::vector<EstimationLog>& logs,
-                                         const NoiseWeights& noise) {
+std::vector<std::string> ChannelsReachedBy(const Vehicle& v,
+                                           const std::vector<std::string>& parameters,
+                                           const std::vector<EstimationLog>& logs,
+                                           const NoiseWeights& noise) {
   std::vector<int> idx;
   std::vector<double> scales;
-  for (const auto& spec : EffectLibrary()[EffectIndex(effect)].parameters) {
-    const int i = v.parameters.IndexOrThrow(effect + "." + spec.name);
+  for (const std::string& name : parameters) {
+    const int i = v.parameters.IndexOrThrow(name);
     idx.push_back(i);
     scales.push_back(v.parameters[i].scale);
   }
@@ -79,45 +139,6 @@ std::vector<std::string> ReachedChannels(const Vehicle& v, const std::string& ef
   return reached;
 }
 
-// The effect's parameter names ("effect.param").
-std::vector<std::string> EffectParameterNames(const std::string& effect) {
-  std::vector<std::string> out;
-  for (const auto& spec : EffectLibrary()[EffectIndex(effect)].parameters) {
-    out.push_back(effect + "." + spec.name);
-  }
-  return out;
-}
-
-std::vector<std::string> AllParameterNames(const std::vector<std::string>& effects) {
-  std::vector<std::string> out;
-  for (const std::string& e : effects) {
-    for (const std::string& n : EffectParameterNames(e)) out.push_back(n);
-  }
-  return out;
-}
-
-// Holm's step-down correction over the testable scores: the i-th smallest
-// (0-based) of m p-values is compared with alpha / (m - i), kept monotone.
-void HolmCorrect(std::vector<CandidateScore>* scores, double alpha) {
-  std::vector<CandidateScore*> tested;
-  for (CandidateScore& s : *scores) {
-    if (s.testable) tested.push_back(&s);
-  }
-  std::sort(tested.begin(), tested.end(), [](const CandidateScore* a, const CandidateScore* b) {
-    if (a->p_value != b->p_value) return a->p_value < b->p_value;
-    return a->statistic > b->statistic;
-  });
-  const int m = static_cast<int>(tested.size());
-  double running = 0;
-  for (int i = 0; i < m; ++i) {
-    running = std::max(running, std::min(1.0, (m - i) * tested[i]->p_value));
-    tested[i]->p_corrected = running;
-    tested[i]->passes = running < alpha;
-  }
-}
-
-}  // namespace
-
 nlohmann::json CandidateScore::ToJson() const {
   nlohmann::json j = {
       {"effect", effect},
@@ -141,14 +162,26 @@ nlohmann::json CandidateScore::ToJson() const {
       {"rss_before", rss_before},
       {"rss_after", rss_after},
       {"bic_change", bic_change},
+      {"predicted_share_of_excess", predicted_share},
       {"num_residuals", num_residuals},
       {"num_free_parameters", num_free_parameters}};
   if (!testable) j["why_not_testable"] = why_not_testable;
-  if (testable) j["linearised_estimates"] = linearised_estimates;
+  if (testable) {
+    j["linearised_estimates"] = linearised_estimates;
+    j["beyond_linear_range"] = beyond_linear_range;
+  }
   if (refitted) {
     j["refit"] = {{"wald_statistic", wald_statistic},
                   {"wald_p_value", wald_p_value},
+                  {"plausible", plausible},
+                  {"share_of_excess_removed", share_of_excess},
+                  {"share_of_excess_removed_held_out",
+                   std::isfinite(share_of_excess_held_out)
+                       ? nlohmann::json(share_of_excess_held_out)
+                       : nlohmann::json(nullptr)},
+                  {"excess_removed_per_channel", excess_removed},
                   {"confirmed", confirmed}};
+    if (!plausible) j["refit"]["why_implausible"] = why_implausible;
     if (!confirmed) j["refit"]["why_not_confirmed"] = why_not_confirmed;
     nlohmann::json est = nlohmann::json::object();
     for (const std::string& name : EffectParameterNames(effect)) {
@@ -162,6 +195,8 @@ nlohmann::json CandidateScore::ToJson() const {
       est[name] = e;
     }
     j["estimates"] = est;
+  } else if (!why_not_confirmed.empty()) {
+    j["why_not_refitted"] = why_not_confirmed;
   }
   return j;
 }
@@ -207,7 +242,7 @@ CandidatePass LinearisePass(const Vehicle& fitted, const OutputErrorResult& fit,
   pass.fitted = fitted;
   pass.fit = fit;
   const std::vector<std::string> present = fitted.EffectNames();
-  Vehicle augmented = fitted;
+  Vehicle augmented = AsTheFitHeldIt(fitted, fit);
   for (const EffectInfo& info : EffectLibrary()) {
     if (std::find(present.begin(), present.end(), info.name) != present.end()) continue;
     pass.candidates.push_back(info.name);
@@ -230,7 +265,7 @@ CandidatePass LinearisePass(const Vehicle& fitted, const OutputErrorResult& fit,
 
 std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
                                             const std::vector<EstimationLog>& logs,
-                                            double alpha, int round) {
+                                            double alpha, int round, double weighted_excess) {
   const LinearisedFit& lin = pass.linearised;
   int n0 = 0;
   const double rss0 = WeightedRss(logs, pass.fit.predictions, pass.fit.noise, &n0);
@@ -252,7 +287,8 @@ std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
     s.num_residuals = n0;
     s.num_free_parameters = num_free + s.num_parameters;
     const Vehicle candidate = CandidateVehicle(pass.fitted, effect);
-    s.channels = ReachedChannels(candidate, effect, logs, pass.fit.noise);
+    const std::vector<std::string> names = EffectParameterNames(effect);
+    s.channels = ChannelsReachedBy(candidate, names, logs, pass.fit.noise);
     s.reason = info.description;
     if (s.channels.empty()) {
       s.why_not_testable =
@@ -265,7 +301,6 @@ std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
     std::string list;
     for (const std::string& c : s.channels) list += (list.empty() ? "" : ", ") + c;
     s.reason += "; it would show in " + list;
-    const std::vector<std::string> names = EffectParameterNames(effect);
     const ColumnTest t = tester.Test(ParameterColumns(lin, names));
     s.clusters = t.clusters;
     s.covariance_dof = t.covariance_dof;
@@ -279,12 +314,17 @@ std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
     s.p_value = t.p_value;
     s.white_statistic = t.white_statistic;
     s.white_p_value = t.white_p_value;
-    s.rss_after = rss0 - t.predicted_rss_drop;
+    // The drop is at most lin.rss (ColumnTester); rss0 leaves out the
+    // continuity ties, so clamp at 0.
+    s.rss_after = std::max(0.0, rss0 - t.predicted_rss_drop);
     s.bic_change = s.num_parameters * std::log(static_cast<double>(n0)) - t.predicted_rss_drop;
+    s.predicted_share = weighted_excess > 0 ? t.predicted_rss_drop / weighted_excess : 0.0;
     for (size_t k = 0; k < names.size(); ++k) {
       const int column = lin.ParameterColumn(names[k]) - lin.num_state_columns;
-      s.linearised_estimates[names[k]] =
-          candidate.parameters.Value(names[k]) + t.step[k] * lin.parameter_scales[column];
+      const Parameter& p = candidate.parameters.Get(names[k]);
+      const double value = p.value + t.step[k] * lin.parameter_scales[column];
+      if (value < p.lower || value > p.upper) s.beyond_linear_range = true;
+      s.linearised_estimates[names[k]] = std::clamp(value, p.lower, p.upper);
     }
     scores.push_back(s);
   }
@@ -303,57 +343,80 @@ std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
   return scores;
 }
 
-bool ConfirmCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
-                      const OutputErrorOptions& fit_options, double alpha, CandidateScore* score,
-                      CandidatePass* next) {
+bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
+                    const OutputErrorOptions& fit_options, CandidateScore* score,
+                    OutputErrorResult* refit, CandidatePass* next) {
   score->refitted = true;
   Vehicle candidate = CandidateVehicle(pass.fitted, score->effect);
-  // Start at the Gauss-Newton step, inside the bounds.
-  for (const auto& [name, value] : score->linearised_estimates) {
+  // Start at the Gauss-Newton step (inside the bounds). A one-sided
+  // parameter (absent at its bound: k_ge, J_r, k_T >= 0) whose step points
+  // out of the bounds would start pinned at absence, where a bounded solver
+  // need not leave it (measured: an undeclared ground effect's k_ge stayed
+  // at 0 while Cz sat at its bound): it starts at the library's typical
+  // strength instead.
+  const auto& specs = EffectLibrary()[EffectIndex(score->effect)].parameters;
+  for (const auto& spec : specs) {
+    const std::string name = score->effect + "." + spec.name;
+    const auto it = score->linearised_estimates.find(name);
+    if (it == score->linearised_estimates.end()) continue;
     const Parameter& p = candidate.parameters.Get(name);
-    candidate.parameters.SetValue(name, std::clamp(value, p.lower, p.upper));
+    const bool pinned_at_absence = (p.value == p.lower && it->second <= p.lower) ||
+                                   (p.value == p.upper && it->second >= p.upper);
+    candidate.parameters.SetValue(
+        name, pinned_at_absence ? std::clamp(std::fabs(spec.typical), p.lower, p.upper) : it->second);
   }
-  // The other parameters start at the current fit: the final segment length
-  // alone, from the current noise weights (re-estimated as the options say).
+  // The other parameters start at the current fit, every declared one free
+  // (a bound the declared fit pressed one against may let go): the final
+  // segment length alone, from the current noise weights.
   OutputErrorOptions o = fit_options;
   o.noise = pass.fit.noise;
   o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
-  const OutputErrorResult refit = FitOutputError(candidate, logs, o);
-  if (!refit.usable) {
-    score->why_not_confirmed = "the joint refit failed: " + refit.why_not_usable;
+  *refit = FitOutputError(candidate, logs, o);
+  if (!refit->usable) {
+    score->why_not_confirmed = "the joint refit failed: " + refit->why_not_usable;
     return false;
   }
-  score->parameters = refit.parameters;
-  score->identifiability = refit.identifiability;
+  score->parameters = refit->parameters;
+  score->identifiability = refit->identifiability;
   int n1 = 0;
-  score->rss_after = WeightedRss(logs, refit.predictions, pass.fit.noise, &n1);
-  candidate.parameters = refit.parameters;
-  CandidatePass at_refit = LinearisePass(candidate, refit, logs, fit_options);
-  const LinearisedFit& lin = at_refit.linearised;
+  score->rss_after = WeightedRss(logs, refit->predictions, pass.fit.noise, &n1);
   const std::vector<std::string> names = EffectParameterNames(score->effect);
+  for (const std::string& name : ParametersAtBounds(refit->parameters)) {
+    if (std::find(names.begin(), names.end(), name) == names.end()) continue;
+    const Parameter& p = refit->parameters.Get(name);
+    score->plausible = false;
+    score->why_implausible += (score->why_implausible.empty() ? "" : "; ") + name + " = " +
+                              std::to_string(p.value) + " at its bound [" +
+                              std::to_string(p.lower) + ", " + std::to_string(p.upper) + "]";
+  }
+  candidate.parameters = refit->parameters;
+  CandidatePass at_refit = LinearisePass(candidate, *refit, logs, fit_options);
+  const LinearisedFit& lin = at_refit.linearised;
   std::vector<std::string> excluded = AllParameterNames(at_refit.candidates);
   excluded.insert(excluded.end(), names.begin(), names.end());
   const ColumnTester tester(lin, ColumnsExcept(lin, excluded));
-  // Scaled distance from absence (every effect's absent value is 0).
-  Eigen::VectorXd values(names.size());
-  for (size_t k = 0; k < names.size(); ++k) {
-    const int column = lin.ParameterColumn(names[k]) - lin.num_state_columns;
-    values[k] = refit.parameters.Value(names[k]) / lin.parameter_scales[column];
+  // Scaled distance from absence (every effect's absent value is 0). A
+  // parameter held at its bound has no column: test the others.
+  std::vector<std::string> tested;
+  for (const std::string& name : names) {
+    if (lin.ParameterColumn(name) >= 0) tested.push_back(name);
   }
-  const ColumnTest t = tester.Test(ParameterColumns(lin, names), &values);
+  if (tested.empty()) {
+    score->why_not_confirmed = "at the refit every parameter of it sits at a bound";
+    return false;
+  }
+  Eigen::VectorXd values(tested.size());
+  for (size_t k = 0; k < tested.size(); ++k) {
+    const int column = lin.ParameterColumn(tested[k]) - lin.num_state_columns;
+    values[k] = refit->parameters.Value(tested[k]) / lin.parameter_scales[column];
+  }
+  const ColumnTest t = tester.Test(ParameterColumns(lin, tested), &values);
   if (!t.ok) {
     score->why_not_confirmed = "at the refit: " + t.why_not;
     return false;
   }
   score->wald_statistic = t.statistic;
   score->wald_p_value = t.p_value;
-  score->confirmed = t.p_value < alpha;
-  if (!score->confirmed) {
-    score->why_not_confirmed = "at the joint refit its parameters are not significantly away from "
-                               "absence (cluster-robust Wald p = " +
-                               std::to_string(t.p_value) + ")";
-    return false;
-  }
   *next = std::move(at_refit);
   return true;
 }

@@ -19,12 +19,22 @@
 // say which channels it can reach, hence the physical reason it would show
 // there.
 //
-// The best passing candidate is then confirmed (ConfirmCandidate): a joint
-// refit with it, and the cluster-robust Wald test of its parameters at the
-// refit (linearised there, which is also the next round's scoring pass).
+// The linearised score ranks and shortlists; it does not decide. The
+// shortlisted candidates are refitted (RefitCandidate): a joint nonlinear
+// refit with the effect, every declared parameter free (free to leave a bound
+// the declared fit pressed it against), then the cluster-robust Wald test of
+// its parameters at the refit (linearised there, which is also the next
+// round's scoring pass). The loop (discovery.h) decides on the refits.
+//
+// Linearisations hold what the fit held: the scale member of a flight-only
+// fit (model.md decision 8; a moment-type candidate is then judged in the
+// identifiable subspace, by its ratio to the held scale) and the declared
+// parameters the fit left at a bound (they cannot absorb what the candidate
+// explains in the direction the bound blocks).
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -44,7 +54,7 @@ struct CandidateScore {
   std::vector<std::string> channels;  // channels its regressors reach
   std::string reason;                 // the physical reason it would show in those channels
   int num_parameters = 0;
-  double rss_before = 0, rss_after = 0;  // after: predicted by the linearisation (or the refit)
+  double rss_before = 0, rss_after = 0;  // after: predicted by the linearisation (or the refit), >= 0
   double bic_change = 0;              // predicted: q ln N - (rss_before - rss_after)
   int num_residuals = 0, num_free_parameters = 0;
   int clusters = 0;                   // clusters of the robust test
@@ -54,13 +64,32 @@ struct CandidateScore {
   double p_corrected = 1;             // Holm over the candidates tried this round
   double white_statistic = 0, white_p_value = 1;  // the white-noise score F, for comparison
   bool passes = false;
-  std::map<std::string, double> linearised_estimates;  // absent value + Gauss-Newton step
-  // Confirmation (the best passing candidate of a round): joint refit, Wald test.
-  bool refitted = false, confirmed = false;
+  // Absent value + Gauss-Newton step, clipped into the parameter bounds;
+  // beyond_linear_range when the step left them (the linearisation is then
+  // only a direction: the refit decides).
+  std::map<std::string, double> linearised_estimates;
+  bool beyond_linear_range = false;
+  // Predicted drop of the weighted RSS over the weighted excess of every
+  // channel (sum of rms^2 - noise^2, in the fit's weights): the shortlist's key.
+  double predicted_share = 0;
+  // The refit (shortlisted candidates): joint refit, Wald test.
+  bool refitted = false;
   double wald_statistic = 0, wald_p_value = 1;
-  std::string why_not_confirmed;
   ParameterSet parameters;            // the refit's estimates (refitted only)
   IdentifiabilityReport identifiability;
+  // Physically meaningful values: none of its parameters at a bound.
+  bool plausible = true;
+  std::string why_implausible;
+  // Practical significance (effects.md step 5): the share of its channels'
+  // excess error, sum over them of (rms^2 - noise^2) / noise^2, that the
+  // refit removes, on the estimation and the held-out data (NaN: no
+  // held-out data), and per channel (estimation data).
+  double share_of_excess = 0;
+  double share_of_excess_held_out = std::numeric_limits<double>::quiet_NaN();
+  std::map<std::string, double> excess_removed;
+  // The loop's decision on the refit (every criterion of discovery.h).
+  bool confirmed = false;
+  std::string why_not_confirmed;
   nlohmann::json ToJson() const;
 };
 
@@ -89,18 +118,31 @@ CandidatePass LinearisePass(const Vehicle& fitted, const OutputErrorResult& fit,
 
 // Scores every candidate of the pass. Sorted: passing first, best first (the
 // largest fall of the BIC the linearisation predicts, q ln N - drop of the
-// weighted RSS), then the others by p-value.
+// weighted RSS), then the others by p-value. weighted_excess: the current
+// fit's excess error in the fit's weights (PredictedShare's denominator).
 std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
                                             const std::vector<EstimationLog>& logs,
-                                            double alpha, int round);
+                                            double alpha, int round, double weighted_excess);
+
+// Channels of the logs whose outputs (or, for flight states, their
+// derivatives) depend on the named parameters of `vehicle`.
+std::vector<std::string> ChannelsReachedBy(const Vehicle& vehicle,
+                                           const std::vector<std::string>& parameters,
+                                           const std::vector<EstimationLog>& logs,
+                                           const NoiseWeights& noise);
+
+// Free parameters of `parameters` within 1e-6 of their range from a bound.
+std::vector<std::string> ParametersAtBounds(const ParameterSet& parameters);
 
 // Refits `score.effect` jointly into the pass's model (starting at its
 // linearised estimates, noise weights of the current fit) and tests its
-// parameters at the refit (cluster-robust Wald, at level alpha). Fills the
-// score's confirmation fields; returns the pass at the refit (the next
-// round's scoring pass) in *next when confirmed.
-bool ConfirmCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
-                      const OutputErrorOptions& fit_options, double alpha, CandidateScore* score,
-                      CandidatePass* next);
+// parameters at the refit (cluster-robust Wald). Fills the score's refit
+// fields (Wald, estimates, plausibility); on success returns the refit in
+// *refit and the pass at the refit (the next round's scoring pass, if it is
+// accepted) in *next. False, with why_not_confirmed, when the refit or the
+// test fails.
+bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
+                    const OutputErrorOptions& fit_options, CandidateScore* score,
+                    OutputErrorResult* refit, CandidatePass* next);
 
 }  // namespace coaxid

@@ -1,0 +1,38 @@
+#include "ident/discover/practical_significance.h"
+
+#include <algorithm>
+
+namespace coaxid {
+
+double WeightedExcess(const std::vector<ChannelResidualTest>& tests, const NoiseWeights& weights) {
+  double excess = 0;
+  for (const ChannelResidualTest& t : tests) {
+    const double w = weights.For(t.channel);
+    excess += t.count * std::max(0.0, t.rms * t.rms - t.noise_std * t.noise_std) / (w * w);
+  }
+  return excess;
+}
+
+ExcessShare ShareOfExcessRemoved(const std::map<std::string, FitError>& before,
+                                 const std::map<std::string, FitError>& after,
+                                 const std::vector<ChannelResidualTest>& tests,
+                                 const std::vector<std::string>& channels) {
+  ExcessShare out;
+  double removed = 0;
+  for (const std::string& c : channels) {
+    const auto b = before.find(c), a = after.find(c);
+    const auto t = std::find_if(tests.begin(), tests.end(),
+                                [&](const ChannelResidualTest& x) { return x.channel == c; });
+    if (b == before.end() || a == after.end() || t == tests.end() || !(t->noise_std > 0)) continue;
+    const double noise2 = t->noise_std * t->noise_std;
+    const double ms_before = b->second.rms * b->second.rms, ms_after = a->second.rms * a->second.rms;
+    const double excess = std::max(0.0, ms_before - noise2);
+    out.excess += excess / noise2;
+    removed += (ms_before - ms_after) / noise2;
+    out.per_channel[c] = excess > 0 ? (ms_before - ms_after) / excess : 0.0;
+  }
+  out.share = out.excess > 0 ? removed / out.excess : 0.0;
+  return out;
+}
+
+}  // namespace coaxid
