@@ -141,13 +141,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   fit.progress = nullptr;  // side by side: the loop reports each result
   fit.num_threads = std::max(1, o.fit.num_threads / n);
   const double level = o.alpha / n;
-  auto one = [&](int k) {
-    const auto t0 = Clock::now();
-    struct Timer {
-      Clock::time_point t0;
-      double* seconds;
-      ~Timer() { *seconds = SecondsSince(t0); }
-    } timer{t0, &refits[k].seconds};
+  auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
     OutputErrorResult refit;
     if (!RefitCandidate(pass, estimation, fit, &s, &refit, &refits[k].next)) return;
@@ -164,6 +158,11 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
               .share;
     }
     refits[k].ok = true;
+  };
+  auto one = [&](int k) {
+    const auto t0 = Clock::now();
+    evaluate(k);
+    refits[k].seconds = SecondsSince(t0);
   };
   std::vector<std::thread> threads;
   for (int k = 1; k < n; ++k) threads.emplace_back(one, k);
@@ -260,10 +259,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   Vehicle start_vehicle = declared;
   OutputErrorOptions declared_fit = o.fit;
   out.start = "starting values from the config";
-  const bool any_flight = std::any_of(estimation.begin(), estimation.end(), [](const EstimationLog& l) {
-    return l.kind == LogKind::kFlight;
-  });
-  if (options.ekf_start && any_flight) {
+  if (options.ekf_start) {  // not usable without a flight log: the config start
     const EkfStart ekf = StartFromEkfPass(declared, estimation);
     Say(options, "discover: " + ekf.note);
     if (ekf.usable) {

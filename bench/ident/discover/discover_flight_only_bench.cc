@@ -20,6 +20,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "bench/ident/bench_vehicle.h"
 #include "experiments/simulation/scenario.h"
 #include "experiments/simulation/simulate_experiment.h"
 #include "ident/discover/discovery.h"
@@ -27,10 +28,6 @@
 namespace coaxid {
 namespace {
 
-const std::map<std::string, double> kTruthFactors = {
-    {"alpha", 1.20}, {"beta", 0.84}, {"sigma0", 0.89}, {"Cx", 0.77},
-    {"Cy", 1.16},    {"Cz", 0.78},   {"gamma1", 1.22}, {"gamma2", 0.82},
-    {"d", 1.28},     {"Ixx", 0.73},  {"Iyy", 1.27},    {"Izz", 1.25}};
 
 struct Case {
   std::string name;
@@ -59,23 +56,14 @@ Scenario FlightFor(const Vehicle& nominal, const Case& c, bool held_out) {
   s.kind = Scenario::Kind::kFlight;
   s.name = c.name;
   s.seed = held_out ? 7007 : 4004;
-  for (const auto& [name, factor] : kTruthFactors) {
+  for (const auto& [name, factor] : Seed37TruthFactors()) {
     s.truth_parameters[name] = factor * nominal.parameters.Value(name);
   }
   s.truth_effects = c.effects;
   FlightScenario& f = s.flight;
   f.duration_s = held_out ? 30 : 60;
   f.rate_hz = 200;
-  f.gains.att_kp = 1.4;
-  f.gains.att_kd = 0.22;
-  f.gains.alt_kp = 40;
-  f.gains.alt_kd = 25;
-  f.gains.alt_ki = 8;
-  f.gains.yaw_kp = 2.5;
-  f.gains.yaw_kd = 1.6;
-  f.gains.pos_kp = 0.8;
-  f.gains.pos_kd = 1.3;
-  f.gains.max_tilt = 0.12;
+  f.gains = StifferGains();
   const double h0 = c.low ? 0.15 : 2.0, h1 = c.low ? 0.8 : 2.3, h2 = c.low ? 0.4 : 1.7;
   f.waypoints = {{0, 0.0, 0.0, h0, 0.3}, {15, -0.4, 0.3, h1, 0.0}, {35, 0.3, -0.3, h2, -0.25},
                  {50, 0.0, 0.0, h0 + 0.1, 0.1}};

@@ -2,7 +2,7 @@
 // simulates itself, under conditions unlike the shipped data/glmav logs, so
 // that neither the timing nor the accuracy is tuned to one data set:
 //  - truth vehicle: configs/glmav.yaml with every unknown multiplied by
-//    1 +/- 10..30 % (kTruthFactors: magnitudes uniform in [0.10, 0.30],
+//    1 +/- 10..30 % (Seed37TruthFactors(): magnitudes uniform in [0.10, 0.30],
 //    random signs, drawn once with std::mt19937 seed 37 and rounded to 0.01;
 //    the seed was picked among those whose hover trim has |omega1 - omega2|
 //    near 45 rad/s: 133.7 vs 178.6 rad/s, where the shipped flight trims at
@@ -47,6 +47,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "bench/ident/bench_vehicle.h"
 #include "core/stopwatch.h"
 #include "dynamics/trim.h"
 #include "experiments/simulation/excitation.h"
@@ -60,17 +61,12 @@
 namespace coaxid {
 namespace {
 
-// Truth / nominal per unknown (see the header comment for how they were drawn).
-const std::vector<std::pair<std::string, double>> kTruthFactors = {
-    {"alpha", 1.20}, {"beta", 0.84}, {"sigma0", 0.89}, {"Cx", 0.77},
-    {"Cy", 1.16},    {"Cz", 0.78},   {"gamma1", 1.22}, {"gamma2", 0.82},
-    {"d", 1.28},     {"Ixx", 0.73},  {"Iyy", 1.27},    {"Izz", 1.25}};
 
 std::string ConfigPath() { return std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml"; }
 
 std::map<std::string, double> TruthParameters(const ParameterSet& nominal) {
   std::map<std::string, double> truth;
-  for (const auto& [name, factor] : kTruthFactors) truth[name] = factor * nominal.Value(name);
+  for (const auto& [name, factor] : Seed37TruthFactors()) truth[name] = factor * nominal.Value(name);
   return truth;
 }
 
@@ -95,18 +91,7 @@ Scenario FlightScenarioForBench(const std::map<std::string, double>& truth) {
   FlightScenario& f = s.flight;
   f.duration_s = 60;
   f.rate_hz = 200;
-  // Stiffer attitude and yaw loops, a firmer altitude loop, a livelier
-  // position loop than ControllerGains' defaults.
-  f.gains.att_kp = 1.4;
-  f.gains.att_kd = 0.22;
-  f.gains.alt_kp = 40;
-  f.gains.alt_kd = 25;
-  f.gains.alt_ki = 8;
-  f.gains.yaw_kp = 2.5;
-  f.gains.yaw_kd = 1.6;
-  f.gains.pos_kp = 0.8;
-  f.gains.pos_kd = 1.3;
-  f.gains.max_tilt = 0.12;
+  f.gains = StifferGains();
   f.waypoints = {{0, 0.0, 0.0, 2.0, 0.3},
                  {15, -0.4, 0.3, 2.3, 0.0},
                  {35, 0.3, -0.3, 1.7, -0.25},
