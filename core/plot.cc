@@ -130,6 +130,13 @@ std::string Script(const Figure& figure, const std::string& data_name,
     s += "set xlabel " + Quoted(panel.x_label) + "\n";
     s += "set ylabel " + Quoted(panel.y_label) + "\n";
     if (panel.log_y) s += "set logscale y\n";
+    if (!panel.x_categories.empty()) {
+      s += "set xtics rotate by -40 left (";
+      for (size_t i = 0; i < panel.x_categories.size(); ++i) {
+        s += (i ? ", " : "") + Quoted(panel.x_categories[i]) + " " + std::to_string(i);
+      }
+      s += ")\nset xrange [-0.5:" + std::to_string(panel.x_categories.size() - 0.5) + "]\n";
+    }
     if (std::isfinite(panel.y_min) || std::isfinite(panel.y_max)) {
       s += "set yrange [" + (std::isfinite(panel.y_min) ? FormatNumber(panel.y_min) : "*") + ":" +
            (std::isfinite(panel.y_max) ? FormatNumber(panel.y_max) : "*") + "]\n";

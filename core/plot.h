@@ -29,6 +29,8 @@ struct PlotPanel {
   double y_min = std::numeric_limits<double>::quiet_NaN();
   double y_max = std::numeric_limits<double>::quiet_NaN();
   std::vector<PlotSeries> series;
+  // Named x positions 0, 1, 2, ... (categories, written rotated); empty: numeric x tics.
+  std::vector<std::string> x_categories;
 };
 
 struct Figure {

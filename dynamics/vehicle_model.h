@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <type_traits>
 
 #include "core/parameters.h"
 #include "core/vehicle_config.h"
@@ -16,6 +17,7 @@
 #include "dynamics/interference_loss.h"
 #include "dynamics/rigid_body.h"
 #include "dynamics/state.h"
+#include "dynamics/truth_only_loads.h"
 
 namespace coaxid {
 
@@ -37,6 +39,13 @@ class VehicleModel {
   bool EffectEnabled(int library_index) const { return effect_offset_[library_index] >= 0; }
   int EffectOffset(int library_index) const { return effect_offset_[library_index]; }
   InterferenceModel interference() const { return interference_; }
+
+  // Simulated truths only (dynamics/truth_only_loads.h): loads outside the
+  // library, applied by the double-valued model alone.
+  void SetTruthOnlyLoads(std::shared_ptr<const TruthOnlyLoads> loads) {
+    truth_only_ = std::move(loads);
+  }
+  bool HasTruthOnlyLoads() const { return truth_only_ != nullptr; }
 
   // Aerodynamic loads in body axes, gravity excluded (eqs. 6-33; in the
   // balance setting eqs. 57-63 with model.md decision 5). x is the 12-state
@@ -74,6 +83,7 @@ class VehicleModel {
   std::shared_ptr<const SigmaTable> table_;
   std::array<int, kNumEffects> effect_offset_;
   bool any_effect_ = false;
+  std::shared_ptr<const TruthOnlyLoads> truth_only_;
 };
 
 template <typename T>
@@ -160,12 +170,17 @@ AeroLoads<T> VehicleModel::LoadsGivenRotation(const T* theta, const T* input, Se
       d * beta * sy * cx * w2,            // eq. 32
       loads.N1 + loads.N2;                // eq. 33
 
-  if (any_effect_) {
+  bool truth_only = false;
+  if constexpr (std::is_same_v<T, double>) truth_only = truth_only_ != nullptr;
+  if (any_effect_ || truth_only) {
     const EffectContext<T> context{theta, setting, input[kOmega1], input[kOmega2], delta_cx,
                                    delta_cy, sigma, T2_B, rotor_z, v_B, w_B, height};
     ForEachEnabledEffect(theta, [&](auto effect, const T* p) {
       decltype(effect)::AddLoads(context, p, &loads);
     });
+    if constexpr (std::is_same_v<T, double>) {
+      if (truth_only) truth_only_->Add(context, &loads);
+    }
   }
   return loads;
 }

@@ -28,7 +28,14 @@ int RunSimulate() {
   const Log log = SimulateScenario(truth, scenario);
   // Write only after everything succeeded: nothing half-written.
   WriteLog(FLAGS_out, log);
-  if (!FLAGS_truth.empty()) WriteJson(FLAGS_truth, TruthJson(truth));
+  if (!FLAGS_truth.empty()) {
+    nlohmann::json truth_json = TruthJson(truth);
+    // Loads outside the library live in the scenario, not in the parameters.
+    if (!scenario.truth_outside_library.empty()) {
+      truth_json["outside_library"] = scenario.truth_outside_library;
+    }
+    WriteJson(FLAGS_truth, truth_json);
+  }
   std::fprintf(stderr, "simulate: %s log, %d rows, %.2f s simulated in %.3f s -> %s\n",
                LogKindName(log.kind), log.NumRows(),
                log.Column("t").back() - log.Column("t").front(), SecondsSince(start),

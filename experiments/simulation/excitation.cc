@@ -46,21 +46,26 @@ InputVector ExcitationSignal::At(double t) const {
     }
     return out;
   }
-  // 3211: +1 for 3 units, -1 for 2, +1 for 1, -1 for 1 (7 units), then 3 units
-  // of rest; channels take turns, repeating.
+  // Pulse trains; channels take turns, one slot each, repeating.
+  //   3211:    +1 for 3 units, -1 for 2, +1 for 1, -1 for 1, then 3 units of rest;
+  //   doublet: +1 for 2 units, -1 for 2, then 4 units of rest.
+  struct Pulse {
+    double until_units, level;
+  };
+  static const std::vector<Pulse> k3211Pulses = {{3, 1}, {5, -1}, {6, 1}, {7, -1}};
+  static const std::vector<Pulse> kDoubletPulses = {{2, 1}, {4, -1}};
+  const bool doublet = spec_.type == Excitation::Type::kDoublet;
+  const std::vector<Pulse>& pulses = doublet ? kDoubletPulses : k3211Pulses;
   const double unit = spec_.pulse_s;
-  const double slot = 10 * unit;
+  const double slot = (doublet ? 8 : 10) * unit;
   const int channel = static_cast<int>(std::floor(tau / slot)) % 4;
   const double u = std::fmod(tau, slot) / unit;
   double level = 0;
-  if (u < 3) {
-    level = 1;
-  } else if (u < 5) {
-    level = -1;
-  } else if (u < 6) {
-    level = 1;
-  } else if (u < 7) {
-    level = -1;
+  for (const Pulse& pulse : pulses) {
+    if (u < pulse.until_units) {
+      level = pulse.level;
+      break;
+    }
   }
   out[channel] = amplitude_[channel] * level;
   return out;

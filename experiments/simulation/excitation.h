@@ -1,6 +1,7 @@
 // Identification excitation added to the controller's outputs: a multisine
 // (orthogonal across channels, Schroeder phases, so the four inputs are
-// uncorrelated over a period) or 3211 pulse trains (channels take turns).
+// uncorrelated over a period), or 3211 or doublet pulse trains (channels take
+// turns).
 #pragma once
 
 #include <array>

@@ -6,6 +6,7 @@
 #include "core/atomic_file.h"
 #include "core/errors.h"
 #include "core/yaml_util.h"
+#include "experiments/simulation/outside_library_loads.h"
 
 namespace coaxid {
 namespace {
@@ -111,8 +112,10 @@ void ParseFlight(const YAML::Node& node, const std::string& where, FlightScenari
         x.type = Excitation::Type::kMultisine;
       } else if (type == "3211") {
         x.type = Excitation::Type::k3211;
+      } else if (type == "doublet") {
+        x.type = Excitation::Type::kDoublet;
       } else {
-        throw InputError(w + ".type: '" + type + "' is not none, multisine or 3211");
+        throw InputError(w + ".type: '" + type + "' is not none, multisine, 3211 or doublet");
       }
     }
     if (e["start_s"]) x.start_s = ReadDouble(e["start_s"], w + ".start_s");
@@ -177,7 +180,7 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& source) 
   if (root["flight"]) ParseFlight(root["flight"], source + ": flight", &s.flight);
   if (const YAML::Node truth = root["truth"]) {
     const std::string w = source + ": truth";
-    CheckKeys(truth, {"parameters", "effects"}, w);
+    CheckKeys(truth, {"parameters", "effects", "outside_library"}, w);
     if (const YAML::Node params = truth["parameters"]) {
       if (!params.IsMap()) throw InputError(w + ".parameters: expected a map");
       for (const auto& kv : params) {
@@ -199,6 +202,14 @@ Scenario ParseScenario(const std::string& yaml_text, const std::string& source) 
         }
         s.truth_effects.emplace_back(name, std::move(overrides));
       }
+    }
+    if (const YAML::Node outside = truth["outside_library"]) {
+      if (!outside.IsMap()) throw InputError(w + ".outside_library: expected a map");
+      for (const auto& kv : outside) {
+        const std::string key = kv.first.as<std::string>();
+        s.truth_outside_library[key] = ReadDouble(kv.second, w + ".outside_library." + key);
+      }
+      ParseOutsideLibrary(s.truth_outside_library, w + ".outside_library");
     }
   }
   return s;

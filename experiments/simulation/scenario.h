@@ -35,7 +35,7 @@ struct BalanceScenario {
 };
 
 struct Excitation {
-  enum class Type { kNone, kMultisine, k3211 };
+  enum class Type { kNone, kMultisine, k3211, kDoublet };
   Type type = Type::kMultisine;
   double start_s = 2.0;  // excitation starts after the vehicle settles
   // Amplitude per input channel (peak), rad/s for rotor speeds, rad for angles.
@@ -43,7 +43,7 @@ struct Excitation {
       {"omega1", 4.0}, {"omega2", 4.0}, {"delta_cx", 0.02}, {"delta_cy", 0.02}};
   double min_hz = 0.2, max_hz = 4.0;  // multisine band
   double period_s = 20.0;             // multisine period (frequency resolution 1/period)
-  double pulse_s = 0.25;              // 3211: unit pulse width
+  double pulse_s = 0.25;              // 3211 and doublet: unit pulse width
 };
 
 struct ControllerGains {
@@ -88,6 +88,8 @@ struct Scenario {
   // "effect.param") and effects switched on (name -> parameter overrides).
   std::map<std::string, double> truth_parameters;
   std::vector<std::pair<std::string, std::map<std::string, ParameterOverride>>> truth_effects;
+  // Loads outside the effect library (experiments/simulation/outside_library_loads.h).
+  std::map<std::string, double> truth_outside_library;
 };
 
 // A scenario file, or one of the built-in names "balance" and "flight".

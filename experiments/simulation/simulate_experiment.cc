@@ -10,6 +10,7 @@
 #include "dynamics/vehicle_ode.h"
 #include "experiments/simulation/excitation.h"
 #include "experiments/simulation/hover_controller.h"
+#include "experiments/simulation/outside_library_loads.h"
 
 namespace coaxid {
 
@@ -32,6 +33,9 @@ Vehicle MakeTruthVehicle(const VehicleConfig& config, const Scenario& scenario) 
     }
     truth.parameters.SetValue(name, value);
   }
+  const OutsideLibraryStrengths outside =
+      ParseOutsideLibrary(scenario.truth_outside_library, scenario.name + ": truth.outside_library");
+  if (outside.Any()) truth.model.SetTruthOnlyLoads(std::make_shared<OutsideLibraryLoads>(outside));
   return truth;
 }
 

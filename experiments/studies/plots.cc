@@ -245,6 +245,40 @@ Figure ErrorVersusLength(const StudySpec& spec, const nlohmann::json& summary) {
   return f;
 }
 
+// discover's share of right answers per truth (randomised study): each
+// single effect, each outside-library load, no effect; pairs pooled.
+Figure Confusion(const nlohmann::json& confusion) {
+  Figure f;
+  f.title = "discover on randomised truths: share of runs right (Wilson 95 % interval)";
+  f.height_px = 520;
+  PlotPanel panel;
+  panel.x_label = "truth";
+  panel.y_label = "share of runs";
+  panel.y_min = 0;
+  panel.y_max = 1.05;
+  PlotSeries right{"right", {}, {}, "points pt 7 ps 1.2 lc rgb '#1f77b4'"};
+  PlotSeries bars{"", {}, {}, "lines lc rgb '#1f77b4'"};
+  auto add = [&](const std::string& label, const nlohmann::json& rate) {
+    if (!rate["rate"].is_number()) return;
+    const double x = static_cast<double>(panel.x_categories.size());
+    panel.x_categories.push_back(label + " (" + std::to_string(rate["runs"].get<int>()) + ")");
+    right.x.push_back(x);
+    right.y.push_back(rate["rate"].get<double>());
+    const double lo = rate["interval"][0].get<double>(), hi = rate["interval"][1].get<double>();
+    AddBar(&bars, x, 0.5 * (lo + hi), 0.5 * (hi - lo));
+  };
+  for (const auto& row : confusion["matrix"]) {
+    const std::string truth = row["truth"].get<std::string>();
+    if (truth.find('+') == std::string::npos) add(truth, row["right"]);
+  }
+  add("two effects", confusion["all"]["pair_both_found"]);
+  if (!right.x.empty()) {
+    panel.series = {right, bars};
+    f.panels.push_back(panel);
+  }
+  return f;
+}
+
 }  // namespace
 
 std::vector<NamedFigure> StudyFigures(const StudySpec& spec, const nlohmann::json& summary,
@@ -260,6 +294,7 @@ std::vector<NamedFigure> StudyFigures(const StudySpec& spec, const nlohmann::jso
   if (discover && spec.sweep.setting == SweepSetting::kEffectStrength) {
     add("detection.png", Detection(spec, summary));
   }
+  if (summary.contains("confusion")) add("confusion.png", Confusion(summary["confusion"]));
   if (spec.sweep.setting == SweepSetting::kLogLength) {
     add("error_vs_length.png", ErrorVersusLength(spec, summary));
   }

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <random>
 
+#include "experiments/studies/random_draw.h"
+
 namespace coaxid {
 
 uint64_t MixSeed(uint64_t seed, uint64_t stream) {
@@ -38,6 +40,7 @@ void SetEffectStrength(const std::string& parameter, double value, Scenario* s) 
 }  // namespace
 
 std::vector<Scenario> PointScenarios(const StudySpec& spec, int point, uint64_t seed) {
+  if (spec.randomise.enabled) return DrawRun(spec, seed).scenarios;
   std::vector<Scenario> out = spec.scenarios;
   const StudySweep& sweep = spec.sweep;
   for (size_t i = 0; i < out.size(); ++i) {

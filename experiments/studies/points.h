@@ -23,6 +23,7 @@ uint64_t MixSeed(uint64_t seed, uint64_t stream);
 // excitation_type and log_length_s the flight excitation and duration;
 // sample_rate_hz every scenario's rate; effect_strength sets the truth
 // effect's parameter (adding the effect where absent, removing it at 0).
+// A randomised study's scenarios are DrawRun(spec, seed).scenarios.
 std::vector<Scenario> PointScenarios(const StudySpec& spec, int point, uint64_t seed);
 
 // The estimators' start: the config's vehicle, only the spec's `estimate`

@@ -7,6 +7,7 @@
 #include "dynamics/vehicle.h"
 #include "experiments/simulation/simulate_experiment.h"
 #include "experiments/studies/points.h"
+#include "experiments/studies/random_draw.h"
 #include "ident/baseline/balance_holds.h"
 #include "ident/baseline/linear_baseline.h"
 #include "ident/discover/discovery.h"
@@ -34,6 +35,7 @@ nlohmann::json Entry(double estimate, double std, bool identifiable, const nlohm
 struct RunLogs {
   std::vector<Log> balance, flight;
   std::vector<EstimationLog> all, flight_estimation;
+  std::vector<EstimationLog> held_out;  // discover's validation (randomised studies)
 };
 
 OutputErrorOptions FitOptions(const StudySpec& spec) {
@@ -119,7 +121,7 @@ nlohmann::json DiscoverRun(const StudySpec& spec, const Vehicle& start, const Ve
   o.max_added = spec.discover_max_added;
   o.window_s = spec.segment_s;
   o.fit = FitOptions(spec);
-  const DiscoveryResult r = Discover(start, logs.all, {}, o);
+  const DiscoveryResult r = Discover(start, logs.all, logs.held_out, o);
   nlohmann::json unexplained = nlohmann::json::array();
   for (const UnexplainedChannel& u : r.unexplained) unexplained.push_back(u.channel);
   nlohmann::json p = IdentifiabilityParameters(r.final.result.parameters,
@@ -137,10 +139,24 @@ nlohmann::json RunStudyRun(const StudySpec& spec, const StudyRunId& id) {
                            {"seed_index", id.seed_index},
                            {"seed", id.seed},
                            {"spec_hash", spec.hash}};
-  const std::vector<Scenario> scenarios = PointScenarios(spec, id.point, id.seed);
-  const Vehicle truth = MakeTruthVehicle(spec.config, scenarios.front());
   RunLogs logs;
+  std::vector<Scenario> scenarios;
+  Vehicle truth;
   try {
+    if (spec.randomise.enabled) {
+      const RandomDraw draw = DrawRun(spec, id.seed);
+      record["draw"] = draw.description;
+      scenarios = draw.scenarios;
+      if (draw.has_held_out) {
+        const Scenario& h = draw.held_out;
+        Log log = SimulateScenario(MakeTruthVehicle(spec.config, h), h);
+        log.source = h.name + " seed " + std::to_string(h.seed);
+        logs.held_out.push_back(MakeEstimationLog(log));
+      }
+    } else {
+      scenarios = PointScenarios(spec, id.point, id.seed);
+    }
+    truth = MakeTruthVehicle(spec.config, scenarios.front());
     for (const Scenario& s : scenarios) {
       Log log = SimulateScenario(MakeTruthVehicle(spec.config, s), s);
       log.source = s.name + " seed " + std::to_string(s.seed);

@@ -9,6 +9,8 @@
 #include "core/errors.h"
 #include "core/yaml_util.h"
 #include "dynamics/vehicle.h"
+#include "dynamics/effects/effect_library.h"
+#include "experiments/simulation/outside_library_loads.h"
 #include "experiments/simulation/simulate_experiment.h"
 #include "experiments/studies/points.h"
 
@@ -74,8 +76,8 @@ StudySweep ParseSweep(const YAML::Node& node, const std::string& where, const St
   if (sweep.setting == SweepSetting::kExcitationType) {
     for (size_t i = 0; i < values.size(); ++i) {
       const std::string type = ReadString(values[i], w);
-      if (type != "multisine" && type != "3211" && type != "none") {
-        throw InputError(w + ": '" + type + "' is not multisine, 3211 or none");
+      if (type != "multisine" && type != "3211" && type != "doublet" && type != "none") {
+        throw InputError(w + ": '" + type + "' is not multisine, 3211, doublet or none");
       }
       sweep.types.push_back(type);
     }
@@ -104,6 +106,118 @@ StudySweep ParseSweep(const YAML::Node& node, const std::string& where, const St
                      " applies to flight scenarios and the study has none");
   }
   return sweep;
+}
+
+std::array<double, 2> ReadRange(const YAML::Node& node, const std::string& where, double min) {
+  const std::vector<double> v = ReadDoubleList(node, where);
+  if (v.size() != 2 || !(v[0] <= v[1]) || v[0] < min) {
+    throw InputError(where + ": expected [lo, hi] with " + std::to_string(min) + " <= lo <= hi");
+  }
+  return {v[0], v[1]};
+}
+
+double ReadShare(const YAML::Node& node, const std::string& where) {
+  const double v = ReadDouble(node, where);
+  if (!(v >= 0 && v <= 1)) throw InputError(where + ": must lie in [0, 1]");
+  return v;
+}
+
+StudyRandomisation ParseRandomisation(const YAML::Node& node, const std::string& where,
+                                      const StudySpec& spec) {
+  StudyRandomisation r;
+  if (!node) return r;
+  r.enabled = true;
+  CheckKeys(node,
+            {"truth_offset", "truths", "effects", "effect_strength", "outside_strength",
+             "excitation", "swashplate_rms_rad", "omega_difference_rad_s",
+             "gyroscopic_omega_difference_rad_s", "duration_s", "hover_height_m", "low_height_m",
+             "low_share", "balance_share", "held_out_s"},
+            where);
+  if (spec.sweep.setting != SweepSetting::kNone) {
+    throw InputError(where + ": a randomised study draws its settings per seed and takes no sweep");
+  }
+  int flights = 0, balances = 0;
+  for (const Scenario& s : spec.scenarios) (s.kind == Scenario::Kind::kFlight ? flights : balances)++;
+  if (flights != 1 || balances > 1) {
+    throw InputError(where + ": needs exactly one flight scenario (the template of every drawn "
+                     "flight) and at most one balance scenario");
+  }
+  auto range = [&](const char* key, std::array<double, 2>* out, double min) {
+    if (node[key]) *out = ReadRange(node[key], where + "." + key, min);
+  };
+  range("truth_offset", &r.truth_offset, 0);
+  range("effect_strength", &r.effect_strength, 0);
+  range("swashplate_rms_rad", &r.swashplate_rms_rad, 0);
+  range("omega_difference_rad_s", &r.omega_difference_rad_s, 0);
+  range("gyroscopic_omega_difference_rad_s", &r.gyroscopic_omega_difference_rad_s, 0);
+  range("duration_s", &r.duration_s, 5);
+  range("hover_height_m", &r.hover_height_m, 0.05);
+  range("low_height_m", &r.low_height_m, 0.05);
+  if (r.truth_offset[1] >= 1) throw InputError(where + ".truth_offset: must stay below 1");
+  if (const YAML::Node t = node["truths"]) {
+    const std::string w = where + ".truths";
+    CheckKeys(t, {"none", "single", "pair", "outside"}, w);
+    r.truth_weights.clear();
+    double total = 0;
+    for (const auto& kv : t) {
+      const std::string key = kv.first.as<std::string>();
+      const double weight = ReadDouble(kv.second, w + "." + key);
+      if (weight < 0) throw InputError(w + "." + key + ": must be >= 0");
+      r.truth_weights[key] = weight;
+      total += weight;
+    }
+    if (!(total > 0)) throw InputError(w + ": needs a positive weight");
+  }
+  if (const YAML::Node e = node["effects"]) {
+    for (size_t i = 0; i < e.size(); ++i) {
+      const std::string name = ReadString(e[i], where + ".effects");
+      if (EffectIndex(name) < 0) {
+        throw InputError(where + ".effects: '" + name + "' is not an effect of the library");
+      }
+      r.effects.push_back(name);
+    }
+  } else {
+    for (const auto& effect : EffectLibrary()) r.effects.push_back(effect.name);
+  }
+  const bool pairs = r.truth_weights.count("pair") && r.truth_weights.at("pair") > 0;
+  if (r.effects.size() < (pairs ? 2u : 1u)) {
+    throw InputError(where + ".effects: too few effects for the truth classes drawn");
+  }
+  if (const YAML::Node o = node["outside_strength"]) {
+    const std::string w = where + ".outside_strength";
+    CheckKeys(o, OutsideLibraryNames(), w);
+    for (const auto& kv : o) {
+      const std::string key = kv.first.as<std::string>();
+      r.outside_strength[key] = ReadRange(kv.second, w + "." + key, 0);
+    }
+  }
+  if (const YAML::Node e = node["excitation"]) {
+    r.excitations.clear();
+    for (size_t i = 0; i < e.size(); ++i) {
+      const std::string type = ReadString(e[i], where + ".excitation");
+      if (type != "multisine" && type != "3211" && type != "doublet") {
+        throw InputError(where + ".excitation: '" + type + "' is not multisine, 3211 or doublet");
+      }
+      r.excitations.push_back(type);
+    }
+    if (r.excitations.empty()) throw InputError(where + ".excitation: expected a non-empty list");
+  }
+  if (node["low_share"]) r.low_share = ReadShare(node["low_share"], where + ".low_share");
+  if (node["balance_share"]) {
+    r.balance_share = ReadShare(node["balance_share"], where + ".balance_share");
+    if (r.balance_share > 0 && balances == 0) {
+      throw InputError(where + ".balance_share: the study lists no balance scenario");
+    }
+  } else if (balances == 0) {
+    r.balance_share = 0;
+  }
+  if (node["held_out_s"]) {
+    r.held_out_s = ReadDouble(node["held_out_s"], where + ".held_out_s");
+    if (!(r.held_out_s == 0 || r.held_out_s >= 5)) {
+      throw InputError(where + ".held_out_s: 0 (none) or at least 5 s");
+    }
+  }
+  return r;
 }
 
 bool SameParameters(const ParameterSet& a, const ParameterSet& b) {
@@ -228,7 +342,7 @@ StudySpec ParseStudySpec(const std::string& yaml_text, const std::string& source
   if (!root.IsMap()) throw InputError(source + ": expected a YAML map");
   CheckKeys(root,
             {"study", "config", "scenarios", "estimate", "methods", "seeds", "sweep",
-             "output_error", "discover"},
+             "randomise", "output_error", "discover"},
             source);
   StudySpec spec;
   spec.source = source;
@@ -301,6 +415,7 @@ StudySpec ParseStudySpec(const std::string& yaml_text, const std::string& source
   }
 
   spec.sweep = ParseSweep(root["sweep"], source + ": sweep", spec);
+  spec.randomise = ParseRandomisation(root["randomise"], source + ": randomise", spec);
 
   if (const YAML::Node oe = root["output_error"]) {
     const std::string w = source + ": output_error";

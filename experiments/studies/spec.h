@@ -5,7 +5,9 @@
 // order, on any number of threads, processes or machines.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -22,7 +24,7 @@ enum class SweepSetting {
   kNone,             // plain Monte Carlo: one point
   kNoiseScale,       // factor on every noise std of every scenario
   kExcitationScale,  // factor on the flight excitation amplitudes and the balance swashplate grid
-  kExcitationType,   // flight excitation: multisine, 3211, none
+  kExcitationType,   // flight excitation: multisine, 3211, doublet, none
   kLogLength,        // flight duration [s]
   kSampleRate,       // flight and balance sampling rate [Hz]
   kInitialError,     // relative perturbation of the start values (uniform in +-value, per seed)
@@ -42,6 +44,33 @@ struct StudySweep {
   double Value(int point) const;
 };
 
+// A randomised study (key `randomise`, docs/study.md): every seed draws its
+// own truth vehicle, truth effects and flight, as a user's vehicles and
+// flights differ; used by the discover confusion study (issue 13). Ranges
+// are [lo, hi], drawn uniformly.
+struct StudyRandomisation {
+  bool enabled = false;
+  std::array<double, 2> truth_offset{0.10, 0.30};  // |truth / config - 1| per free parameter, random sign
+  // Relative weights of the truth classes: no effect, one library effect,
+  // two, one load outside the library (experiments/simulation/outside_library_loads.h).
+  std::map<std::string, double> truth_weights{
+      {"none", 3}, {"single", 8}, {"pair", 2}, {"outside", 2}};
+  std::vector<std::string> effects;                   // library effects drawn (default: all)
+  std::array<double, 2> effect_strength{0.7, 1.4};    // x the effect's typical strength
+  std::map<std::string, std::array<double, 2>> outside_strength{
+      {"yaw_from_swashplate", {1.5e-3, 4e-3}}, {"thrust_from_climb_rate", {0.2, 0.5}}};
+  std::vector<std::string> excitations{"multisine", "3211", "doublet"};
+  std::array<double, 2> swashplate_rms_rad{0.02, 0.06};
+  std::array<double, 2> omega_difference_rad_s{0, 50};          // hover trim |omega1 - omega2|
+  std::array<double, 2> gyroscopic_omega_difference_rad_s{20, 50};  // when gyroscopic is in the truth
+  std::array<double, 2> duration_s{30, 60};
+  std::array<double, 2> hover_height_m{1.5, 2.5};
+  std::array<double, 2> low_height_m{0.13, 0.9};  // always when ground_effect is in the truth
+  double low_share = 0.5;      // share of the other flights flown low
+  double balance_share = 0.5;  // share of runs that add the spec's balance scenario
+  double held_out_s = 30;      // a 3211 flight held out for discover (0: none)
+};
+
 struct StudySpec {
   std::string source;       // the spec file
   std::string name;         // file stem unless given
@@ -54,6 +83,7 @@ struct StudySpec {
   int seed_count = 0;
   uint64_t base_seed = 1;
   StudySweep sweep;
+  StudyRandomisation randomise;
   // output_error (and discover's fits).
   double segment_s = 1.0;
   int noise_relaxations = 2;

@@ -9,6 +9,7 @@
 
 #include "core/statistics.h"
 #include "experiments/simulation/simulate_experiment.h"
+#include "experiments/studies/confusion.h"
 #include "experiments/studies/points.h"
 
 namespace coaxid {
@@ -23,6 +24,7 @@ double BinomialLogPmf(int n, int k, double p) {
 
 // Effects of the point's truth that the config does not declare.
 std::vector<std::string> UndeclaredEffects(const StudySpec& spec, int point) {
+  if (spec.randomise.enabled) return {};  // each run has its own truth: see the confusion table
   const std::vector<Scenario> scenarios = PointScenarios(spec, point, spec.base_seed);
   std::set<std::string> declared;
   for (const auto& e : spec.config.effects) declared.insert(e.first);
@@ -33,16 +35,19 @@ std::vector<std::string> UndeclaredEffects(const StudySpec& spec, int point) {
   return out;
 }
 
+// truth: per run (a randomised study draws one per run).
 nlohmann::json ParameterStatistics(const std::vector<double>& estimate,
-                                   const std::vector<double>& std, double truth) {
-  std::vector<double> error, with_std;
+                                   const std::vector<double>& std,
+                                   const std::vector<double>& truth) {
+  std::vector<double> error, relative_error, with_std;
   int covered = 0, n_std = 0;
   for (size_t i = 0; i < estimate.size(); ++i) {
-    error.push_back(estimate[i] - truth);
+    error.push_back(estimate[i] - truth[i]);
+    relative_error.push_back(truth[i] != 0 ? error.back() / std::fabs(truth[i]) : NAN);
     if (std::isfinite(std[i])) {
       ++n_std;
       with_std.push_back(std[i]);
-      if (std::fabs(estimate[i] - truth) <= kIntervalHalfWidthInStd * std[i]) ++covered;
+      if (std::fabs(estimate[i] - truth[i]) <= kIntervalHalfWidthInStd * std[i]) ++covered;
     }
   }
   const double spread = StdDev(estimate), mean_std = Mean(with_std);
@@ -54,29 +59,15 @@ nlohmann::json ParameterStatistics(const std::vector<double>& estimate,
     coverage["in_band"] = covered >= lo && covered <= hi;
   }
   return {{"runs", estimate.size()},
-          {"truth", truth},
+          {"truth", Number(Mean(truth))},
           {"mean", Number(Mean(estimate))},
           {"bias", Number(Mean(error))},
-          {"relative_bias", Number(truth != 0 ? Mean(error) / std::fabs(truth) : NAN)},
+          {"relative_bias", Number(Mean(relative_error))},
           {"spread", Number(spread)},
           {"rmse", Number(Rms(error))},
           {"mean_std", Number(mean_std)},
           {"spread_over_std", Number(spread / mean_std)},
           {"coverage", coverage}};
-}
-
-// Rate with its Wilson 95 % interval.
-nlohmann::json Rate(int count, int n) {
-  if (n == 0) {
-    return {{"count", 0}, {"runs", 0}, {"rate", nullptr}, {"interval", {nullptr, nullptr}}};
-  }
-  const double z = kIntervalHalfWidthInStd, p = static_cast<double>(count) / n;
-  const double centre = (p + z * z / (2 * n)) / (1 + z * z / n);
-  const double half = z / (1 + z * z / n) * std::sqrt(p * (1 - p) / n + z * z / (4.0 * n * n));
-  return {{"count", count},
-          {"runs", n},
-          {"rate", p},
-          {"interval", {std::max(0.0, centre - half), std::min(1.0, centre + half)}}};
 }
 
 nlohmann::json MethodSummary(const std::string& method,
@@ -86,8 +77,7 @@ nlohmann::json MethodSummary(const std::string& method,
   std::string first_error;
   // Parameters in first-seen order (the method's order).
   std::vector<std::string> names;
-  std::map<std::string, std::vector<double>> estimates, stds;
-  std::map<std::string, double> truths;
+  std::map<std::string, std::vector<double>> estimates, stds, truths;
   std::map<std::string, int> detected;
   int false_alarms = 0;
   for (const nlohmann::json* r : runs) {
@@ -104,7 +94,7 @@ nlohmann::json MethodSummary(const std::string& method,
       if (!estimates.count(name)) names.push_back(name);
       estimates[name].push_back(p["estimate"].get<double>());
       stds[name].push_back(p["std"].is_null() ? NAN : p["std"].get<double>());
-      truths[name] = p["truth"].get<double>();
+      truths[name].push_back(p["truth"].get<double>());
     }
     if (m.contains("added")) {
       bool false_alarm = false;
@@ -128,9 +118,9 @@ nlohmann::json MethodSummary(const std::string& method,
   out["parameters"] = parameters;
   if (method == "discover") {
     nlohmann::json detection = nlohmann::json::object();
-    for (const std::string& e : undeclared) detection[e] = Rate(detected[e], ok);
+    for (const std::string& e : undeclared) detection[e] = RateJson(detected[e], ok);
     out["detection"] = detection;
-    out["false_alarm"] = Rate(false_alarms, ok);
+    out["false_alarm"] = RateJson(false_alarms, ok);
   }
   return out;
 }
@@ -143,6 +133,19 @@ std::string Format(const nlohmann::json& v, const char* format = "%.4g") {
 }
 
 }  // namespace
+
+nlohmann::json RateJson(int count, int n) {
+  if (n == 0) {
+    return {{"count", 0}, {"runs", 0}, {"rate", nullptr}, {"interval", {nullptr, nullptr}}};
+  }
+  const double z = kIntervalHalfWidthInStd, p = static_cast<double>(count) / n;
+  const double centre = (p + z * z / (2 * n)) / (1 + z * z / n);
+  const double half = z / (1 + z * z / n) * std::sqrt(p * (1 - p) / n + z * z / (4.0 * n * n));
+  return {{"count", count},
+          {"runs", n},
+          {"rate", p},
+          {"interval", {std::max(0.0, centre - half), std::min(1.0, centre + half)}}};
+}
 
 std::pair<int, int> BinomialBand(int n, double p, double confidence) {
   if (n <= 0) return {0, 0};
@@ -193,6 +196,9 @@ nlohmann::json SummarizeStudy(const StudySpec& spec, const std::vector<nlohmann:
       {"nominal_coverage", kNominalCoverage},
       {"points", points}};
   if (!spec.sweep.parameter.empty()) summary["parameter"] = spec.sweep.parameter;
+  const bool discover = std::find(spec.methods.begin(), spec.methods.end(),
+                                  StudyMethod::kDiscover) != spec.methods.end();
+  if (spec.randomise.enabled && discover) summary["confusion"] = ConfusionSummary(records);
   return summary;
 }
 
@@ -251,6 +257,7 @@ std::string StudySummaryMarkdown(const nlohmann::json& s) {
       }
     }
   }
+  if (s.contains("confusion")) md += ConfusionMarkdown(s["confusion"]);
   return md;
 }
 

@@ -25,6 +25,10 @@ constexpr double kIntervalHalfWidthInStd = 1.959963984540054;  // two-sided 95 %
 // 2.5 % and P(X > hi) <= 2.5 %, each the tightest such bound. n = 0 gives [0, 0].
 std::pair<int, int> BinomialBand(int n, double p, double confidence = 0.95);
 
+// count of n as {"count", "runs", "rate", "interval": Wilson 95 % [lo, hi]}
+// (rate and interval null when n = 0).
+nlohmann::json RateJson(int count, int n);
+
 nlohmann::json SummarizeStudy(const StudySpec& spec, const std::vector<nlohmann::json>& records);
 std::string StudySummaryMarkdown(const nlohmann::json& summary);
 

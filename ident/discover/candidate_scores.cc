@@ -180,6 +180,7 @@ nlohmann::json CandidateScore::ToJson() const {
                        ? nlohmann::json(share_of_excess_held_out)
                        : nlohmann::json(nullptr)},
                   {"excess_removed_per_channel", excess_removed},
+                  {"channels_excess", channels_excess},
                   {"confirmed", confirmed}};
     if (!plausible) j["refit"]["why_implausible"] = why_implausible;
     if (!confirmed) j["refit"]["why_not_confirmed"] = why_not_confirmed;

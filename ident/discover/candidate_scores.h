@@ -87,6 +87,9 @@ struct CandidateScore {
   double share_of_excess = 0;
   double share_of_excess_held_out = std::numeric_limits<double>::quiet_NaN();
   std::map<std::string, double> excess_removed;
+  // The channels' excess before the refit, sum of (rms^2 - noise^2) / noise^2
+  // (estimation data): a share of almost nothing means nothing.
+  double channels_excess = 0;
   // The loop's decision on the refit (every criterion of discovery.h).
   bool confirmed = false;
   std::string why_not_confirmed;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <atomic>
 #include <thread>
 
 #include "core/errors.h"
@@ -139,7 +140,8 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
              NumberText(SecondsSince(start), "%.1f s") + " so far)");
   OutputErrorOptions fit = o.fit;
   fit.progress = nullptr;  // side by side: the loop reports each result
-  fit.num_threads = std::max(1, o.fit.num_threads / n);
+  const int workers = std::max(1, std::min(n, o.fit.num_threads));
+  fit.num_threads = std::max(1, o.fit.num_threads / workers);
   const double level = o.alpha / n;
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
@@ -151,6 +153,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
                                                  now.residual_tests, s.channels);
     s.share_of_excess = est.share;
     s.excess_removed = est.per_channel;
+    s.channels_excess = est.excess;
     if (!validation.empty()) {
       s.share_of_excess_held_out =
           ShareOfExcessRemoved(now.validation, refits[k].snapshot.validation,
@@ -164,9 +167,13 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     evaluate(k);
     refits[k].seconds = SecondsSince(t0);
   };
+  std::atomic<int> next{0};
+  auto worker = [&] {
+    for (int k = next++; k < n; k = next++) one(k);
+  };
   std::vector<std::thread> threads;
-  for (int k = 1; k < n; ++k) threads.emplace_back(one, k);
-  one(0);
+  for (int w = 1; w < workers; ++w) threads.emplace_back(worker);
+  worker();
   for (std::thread& t : threads) t.join();
   for (int k = 0; k < n; ++k) {
     CandidateScore& s = (*scores)[shortlist[k]];
@@ -180,6 +187,10 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
               NumberText(level, "%.3g") + ")";
       } else if (!s.plausible) {
         why = "not physically meaningful: " + s.why_implausible;
+      } else if (!(s.channels_excess >= o.min_channels_excess)) {
+        why = "its channels hold almost no excess error to remove (" +
+              NumberText(s.channels_excess, "%.3g") + " noise variances, below " +
+              NumberText(o.min_channels_excess, "%.3g") + ")";
       } else if (!(s.share_of_excess >= o.min_share_of_excess &&
                    share_held_out >= o.min_share_of_excess)) {
         why = "practically insignificant: it removes " + NumberText(100 * s.share_of_excess, "%.1f") +
@@ -221,6 +232,10 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
   }
   if (!(min_share_of_excess >= 0 && min_share_of_excess < 1)) {
     *why = "min_share_of_excess must be in [0, 1)";
+    return false;
+  }
+  if (!(min_channels_excess >= 0)) {
+    *why = "min_channels_excess must be >= 0";
     return false;
   }
   if (fit_max_iterations < 1) {
@@ -439,6 +454,7 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
              "error on the estimation and the held-out data; the qualifying refit that removes "
              "the most is added"},
             {"min_share_of_excess", options.min_share_of_excess},
+            {"min_channels_excess", options.min_channels_excess},
             {"max_refits", options.max_refits},
             {"whiteness_test", "Ljung-Box, chi-square p-value by the regularized incomplete gamma"},
             {"ljung_box_lags", options.residuals.lags},

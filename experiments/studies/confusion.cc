@@ -1,0 +1,144 @@
+#include "experiments/studies/confusion.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <set>
+
+#include "experiments/studies/summary.h"
+
+namespace coaxid {
+namespace {
+
+struct Tally {
+  int runs = 0, count = 0;
+  void Add(bool hit) {
+    ++runs;
+    count += hit;
+  }
+  nlohmann::json Json() const { return RateJson(count, runs); }
+};
+
+struct Rates {
+  std::map<std::string, Tally> single_found_alone;
+  Tally nothing_wrong_added, outside_unexplained, none_false_alarm, pair_both_found;
+  nlohmann::json Json() const {
+    nlohmann::json single = nlohmann::json::object();
+    for (const auto& [effect, t] : single_found_alone) single[effect] = t.Json();
+    return {{"single_found_alone", single},
+            {"nothing_wrong_added", nothing_wrong_added.Json()},
+            {"outside_unexplained", outside_unexplained.Json()},
+            {"none_false_alarm", none_false_alarm.Json()},
+            {"pair_both_found", pair_both_found.Json()}};
+  }
+};
+
+std::string Join(const std::vector<std::string>& names, const char* empty) {
+  if (names.empty()) return empty;
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : "+") + n;
+  return out;
+}
+
+std::string Percent(const nlohmann::json& rate) {
+  if (!rate["rate"].is_number()) return "-";
+  char text[96];
+  std::snprintf(text, sizeof text, "%d/%d = %.0f %% (%.0f-%.0f)", rate["count"].get<int>(),
+                rate["runs"].get<int>(), 100 * rate["rate"].get<double>(),
+                100 * rate["interval"][0].get<double>(), 100 * rate["interval"][1].get<double>());
+  return text;
+}
+
+}  // namespace
+
+nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records) {
+  std::map<std::string, std::map<std::string, int>> matrix;  // truth -> added -> runs
+  std::map<std::string, Tally> right_by_truth, unexplained_by_truth;
+  Rates all, flight_only, with_balance;
+  int failed = 0;
+  for (const nlohmann::json& r : records) {
+    if (!r.contains("draw") || !r["methods"].contains("discover") ||
+        !r["methods"]["discover"]["ok"].get<bool>()) {
+      ++failed;
+      continue;
+    }
+    const nlohmann::json& draw = r["draw"];
+    const nlohmann::json& m = r["methods"]["discover"];
+    const std::string truth = draw["truth"].get<std::string>();
+    const std::string truth_class = draw["truth_class"].get<std::string>();
+    std::set<std::string> truth_effects;
+    if (truth_class == "single" || truth_class == "pair") {
+      for (size_t start = 0; start <= truth.size();) {
+        const size_t plus = std::min(truth.find('+', start), truth.size());
+        truth_effects.insert(truth.substr(start, plus - start));
+        start = plus + 1;
+      }
+    }
+    std::vector<std::string> added = m["added"].get<std::vector<std::string>>();
+    std::sort(added.begin(), added.end());
+    const bool unexplained = !m["unexplained"].empty();
+    bool wrong = false;
+    for (const std::string& a : added) wrong = wrong || !truth_effects.count(a);
+    const bool exact = !wrong && added.size() == truth_effects.size();
+    const bool right = truth_class == "outside" ? added.empty() && unexplained : exact;
+    ++matrix[truth][Join(added, "nothing")];
+    right_by_truth[truth].Add(right);
+    unexplained_by_truth[truth].Add(unexplained);
+    for (Rates* rates : {&all, draw["balance"].get<bool>() ? &with_balance : &flight_only}) {
+      rates->nothing_wrong_added.Add(!wrong);
+      if (truth_class == "single") rates->single_found_alone[truth].Add(exact);
+      if (truth_class == "pair") rates->pair_both_found.Add(exact);
+      if (truth_class == "outside") rates->outside_unexplained.Add(added.empty() && unexplained);
+      if (truth_class == "none") rates->none_false_alarm.Add(!added.empty());
+    }
+  }
+  nlohmann::json rows = nlohmann::json::array();
+  for (const auto& [truth, columns] : matrix) {
+    rows.push_back({{"truth", truth},
+                    {"added", columns},
+                    {"right", right_by_truth[truth].Json()},
+                    {"unexplained_reported", unexplained_by_truth[truth].Json()}});
+  }
+  return {{"runs_judged", static_cast<int>(records.size()) - failed},
+          {"runs_failed", failed},
+          {"matrix", rows},
+          {"all", all.Json()},
+          {"flight_only", flight_only.Json()},
+          {"flight_and_balance", with_balance.Json()}};
+}
+
+std::string ConfusionMarkdown(const nlohmann::json& c) {
+  std::string md = "\n## discover: truth -> added (" + std::to_string(c["runs_judged"].get<int>()) +
+                   " runs judged, " + std::to_string(c["runs_failed"].get<int>()) +
+                   " failed)\n\nRates as count/runs = share (Wilson 95 % interval, in %).\n\n"
+                   "| rate | all | flight only | flight + balance |\n|---|---|---|---|\n";
+  auto row = [&](const std::string& name, const std::string& key, const std::string& sub = "") {
+    auto get = [&](const char* group) -> nlohmann::json {
+      const nlohmann::json& g = c[group];
+      if (sub.empty()) return g[key];
+      return g[key].contains(sub) ? g[key][sub] : RateJson(0, 0);
+    };
+    md += "| " + name + " | " + Percent(get("all")) + " | " + Percent(get("flight_only")) + " | " +
+          Percent(get("flight_and_balance")) + " |\n";
+  };
+  for (const auto& [effect, rate] : c["all"]["single_found_alone"].items()) {
+    row(effect + " alone: found, nothing else", "single_found_alone", effect);
+  }
+  row("two effects: both found, nothing else", "pair_both_found");
+  row("outside the library: nothing added, unexplained reported", "outside_unexplained");
+  row("no effect: false alarm", "none_false_alarm");
+  row("nothing wrong added (all runs)", "nothing_wrong_added");
+  md += "\n| truth | runs | right | unexplained reported | added (runs) |\n|---|---|---|---|---|\n";
+  for (const auto& r : c["matrix"]) {
+    std::string added;
+    for (const auto& [name, n] : r["added"].items()) {
+      added += (added.empty() ? "" : ", ") + name + " " + std::to_string(n.get<int>());
+    }
+    md += "| " + r["truth"].get<std::string>() + " | " +
+          std::to_string(r["right"]["runs"].get<int>()) + " | " + Percent(r["right"]) + " | " +
+          Percent(r["unexplained_reported"]) + " | " + added + " |\n";
+  }
+  return md;
+}
+
+}  // namespace coaxid

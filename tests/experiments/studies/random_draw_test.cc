@@ -1,0 +1,167 @@
+// Randomised studies (spec key `randomise`, experiments/studies/random_draw.h):
+// each seed's draw is a pure function of (spec, seed), stays in the spec's
+// ranges, sets the hover trim's |omega1 - omega2| it reports, flies low when
+// the truth has a ground effect, and draws the truth classes at their
+// weights; specs that cannot be randomised are refused. The confusion table
+// counts what discover added against the truth.
+#include <cmath>
+#include <map>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "core/errors.h"
+#include "dynamics/trim.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "experiments/studies/confusion.h"
+#include "experiments/studies/random_draw.h"
+
+namespace coaxid {
+namespace {
+
+const std::string kSpecPath = std::string(COAXID_SOURCE_DIR) + "/configs/studies/test_random.yaml";
+
+std::string SpecText(const std::string& extra = "") {
+  return "study: random\nconfig: ../glmav.yaml\n"
+         "scenarios: [../scenarios/flight.yaml, ../scenarios/balance_short.yaml]\n"
+         "methods: [discover]\nseeds: {count: 10, base: 5}\n" +
+         (extra.empty() ? std::string("randomise: {}\n") : extra);
+}
+
+TEST(RandomDraw, IsAPureFunctionOfTheSeedAndStaysInItsRanges) {
+  const StudySpec spec = ParseStudySpec(SpecText(), kSpecPath);
+  const Vehicle nominal = MakeVehicle(spec.config);
+  const StudyRandomisation& r = spec.randomise;
+  for (uint64_t seed = 100; seed < 130; ++seed) {
+    const RandomDraw draw = DrawRun(spec, seed);
+    EXPECT_EQ(draw.description, DrawRun(spec, seed).description) << seed;
+    const nlohmann::json& d = draw.description;
+    // Every unknown but gamma2 (set by the trim) 10-30 % off its config value.
+    for (const std::string& name : nominal.parameters.FreeNames()) {
+      if (name == "gamma2") continue;
+      const double ratio =
+          d["truth_parameters"][name].get<double>() / nominal.parameters.Value(name);
+      EXPECT_GE(std::fabs(ratio - 1), r.truth_offset[0] - 1e-12) << name << " seed " << seed;
+      EXPECT_LE(std::fabs(ratio - 1), r.truth_offset[1] + 1e-12) << name << " seed " << seed;
+    }
+    const nlohmann::json& f = d["flight"];
+    const double duration = f["duration_s"].get<double>();
+    EXPECT_TRUE(duration >= 30 && duration <= 60) << duration;
+    const double rms = f["swashplate_rms_rad"].get<double>();
+    EXPECT_TRUE(rms >= 0.02 && rms <= 0.06) << rms;
+    const bool low = f["band"] == "low";
+    for (const auto& h : f["heights_m"]) {
+      const std::array<double, 2> band = low ? r.low_height_m : r.hover_height_m;
+      EXPECT_TRUE(h.get<double>() >= band[0] && h.get<double>() <= band[1]) << h;
+    }
+    const bool ground = draw.truth_label.find("ground_effect") != std::string::npos;
+    if (ground) EXPECT_TRUE(low) << seed;
+    // The reported trim difference is the truth's, at the first waypoint.
+    const Scenario& flight = draw.scenarios.front();
+    const Vehicle truth = MakeTruthVehicle(spec.config, flight);
+    const HoverTrim trim = TrimHover(truth.model, truth.parameters.Values(),
+                                     flight.flight.waypoints.front().height);
+    const double difference = trim.input[kOmega1] - trim.input[kOmega2];
+    EXPECT_NEAR(difference, f["omega_difference_rad_s"].get<double>(), 1e-9);
+    const bool gyroscopic = draw.truth_label.find("gyroscopic") != std::string::npos;
+    const std::array<double, 2> range =
+        gyroscopic ? r.gyroscopic_omega_difference_rad_s : r.omega_difference_rad_s;
+    EXPECT_GE(std::fabs(difference), range[0] - 0.01) << seed;
+    EXPECT_LE(std::fabs(difference), range[1] + 0.01) << seed;
+    // The held-out flight and the balance log (if drawn) share the truth.
+    ASSERT_TRUE(draw.has_held_out);
+    EXPECT_EQ(draw.held_out.truth_parameters, flight.truth_parameters);
+    EXPECT_EQ(draw.held_out.flight.excitation.type, Excitation::Type::k3211);
+    EXPECT_EQ(draw.scenarios.size(), d["balance"].get<bool>() ? 2u : 1u);
+    for (const Scenario& s : draw.scenarios) {
+      EXPECT_EQ(s.truth_parameters, flight.truth_parameters);
+      EXPECT_EQ(s.truth_outside_library, flight.truth_outside_library);
+    }
+  }
+}
+
+// Weights none 3, single 8, pair 2, outside 2 (of 15): over 300 seeds each
+// class's count lies within 4 binomial std of its expectation.
+TEST(RandomDraw, DrawsTheTruthClassesAtTheirWeights) {
+  const StudySpec spec = ParseStudySpec(SpecText(), kSpecPath);
+  std::map<std::string, int> count;
+  const int n = 300;
+  for (uint64_t seed = 0; seed < n; ++seed) {
+    ++count[DrawRun(spec, 7000 + seed).description["truth_class"].get<std::string>()];
+  }
+  for (const auto& [name, weight] : spec.randomise.truth_weights) {
+    const double p = weight / 15.0;
+    EXPECT_NEAR(count[name], n * p, 4 * std::sqrt(n * p * (1 - p))) << name;
+  }
+}
+
+TEST(RandomDraw, SpecsThatCannotBeRandomisedAreRefused) {
+  auto refused = [&](const std::string& text, const std::string& what) {
+    try {
+      ParseStudySpec(text, kSpecPath);
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  refused(SpecText("sweep: {setting: noise_scale, values: [1, 2]}\nrandomise: {}\n"),
+          "takes no sweep");
+  refused(SpecText("randomise: {truth_offset: [0.3, 0.1]}\n"), "randomise.truth_offset");
+  refused(SpecText("randomise: {effects: [tail_rotor]}\n"), "'tail_rotor' is not an effect");
+  refused(SpecText("randomise: {truths: {some: 1}}\n"), "unknown key 'some'");
+  refused(SpecText("randomise: {excitation: [chirp]}\n"), "'chirp' is not multisine");
+  refused("study: random\nconfig: ../glmav.yaml\nscenarios: [../scenarios/flight.yaml, "
+          "../scenarios/flight_3211.yaml]\nmethods: [discover]\nseeds: {count: 2}\nrandomise: {}\n",
+          "exactly one flight scenario");
+}
+
+nlohmann::json Record(const std::string& truth, const std::string& truth_class, bool balance,
+                      const std::vector<std::string>& added, bool unexplained) {
+  nlohmann::json u = nlohmann::json::array();
+  if (unexplained) u.push_back("r");
+  return {{"draw", {{"truth", truth}, {"truth_class", truth_class}, {"balance", balance}}},
+          {"methods",
+           {{"discover", {{"ok", true}, {"added", added}, {"unexplained", u}}}}}};
+}
+
+TEST(Confusion, CountsWhatWasAddedAgainstTheTruth) {
+  const std::vector<nlohmann::json> records = {
+      Record("none", "none", false, {}, false),
+      Record("none", "none", true, {"wind"}, false),
+      Record("gyroscopic", "single", false, {"gyroscopic"}, false),
+      Record("gyroscopic", "single", true, {"gyroscopic", "wind"}, false),
+      Record("gyroscopic+wind", "pair", false, {"wind", "gyroscopic"}, false),
+      Record("outside:yaw_from_swashplate", "outside", false, {}, true),
+      Record("outside:yaw_from_swashplate", "outside", false, {"cg_offset"}, true),
+      {{"key", "p0_s9"}, {"methods", {{"discover", {{"ok", false}, {"error", "x"}}}}}}};
+  const nlohmann::json c = ConfusionSummary(records);
+  EXPECT_EQ(c["runs_judged"], 7);
+  EXPECT_EQ(c["runs_failed"], 1);
+  const nlohmann::json& all = c["all"];
+  EXPECT_EQ(all["single_found_alone"]["gyroscopic"]["count"], 1);
+  EXPECT_EQ(all["single_found_alone"]["gyroscopic"]["runs"], 2);
+  EXPECT_EQ(all["pair_both_found"]["count"], 1);
+  EXPECT_EQ(all["outside_unexplained"]["count"], 1);
+  EXPECT_EQ(all["outside_unexplained"]["runs"], 2);
+  EXPECT_EQ(all["none_false_alarm"]["count"], 1);
+  // Wrong additions: wind (none), wind (gyroscopic), cg_offset (outside).
+  EXPECT_EQ(all["nothing_wrong_added"]["count"], 4);
+  EXPECT_EQ(all["nothing_wrong_added"]["runs"], 7);
+  EXPECT_EQ(c["flight_and_balance"]["nothing_wrong_added"]["runs"], 2);
+  EXPECT_EQ(c["flight_and_balance"]["nothing_wrong_added"]["count"], 0);
+  bool seen = false;
+  for (const auto& row : c["matrix"]) {
+    if (row["truth"] == "gyroscopic") {
+      seen = true;
+      EXPECT_EQ(row["added"]["gyroscopic"], 1);
+      EXPECT_EQ(row["added"]["gyroscopic+wind"], 1);
+    }
+  }
+  EXPECT_TRUE(seen);
+  EXPECT_NE(ConfusionMarkdown(c).find("| gyroscopic alone: found, nothing else | 1/2 = 50 %"),
+            std::string::npos)
+      << ConfusionMarkdown(c);
+}
+
+}  // namespace
+}  // namespace coaxid
