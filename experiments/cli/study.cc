@@ -18,6 +18,7 @@
 #include "experiments/studies/mpi.h"
 #include "experiments/studies/plots.h"
 #include "experiments/studies/records.h"
+#include "experiments/studies/run.h"
 #include "experiments/studies/runner.h"
 #include "experiments/studies/summary.h"
 
@@ -30,6 +31,9 @@ DEFINE_int32(export, 0,
              "instead of running");
 DEFINE_bool(merge, false, "study: merge --out's runs and parts and write the summary");
 DEFINE_string(job, "", "study: run one exported job (--out/jobs/job_K.yaml)");
+DEFINE_string(run, "",
+              "study: look into one run (its key, e.g. p0_s12): write its simulated logs and "
+              "its record to --out, the methods' progress on stderr; the study folder is untouched");
 
 namespace coaxid {
 namespace {
@@ -40,7 +44,8 @@ constexpr const char* kStudyUsage =
     "usage: coaxid study --spec=FILE --out=DIR [--jobs=N] [--restart] [--max_runs=N]\n"
     "       coaxid study --spec=FILE --out=DIR --export=N\n"
     "       coaxid study --job=DIR/jobs/job_K.yaml [--jobs=N]\n"
-    "       coaxid study --merge --out=DIR";
+    "       coaxid study --merge --out=DIR\n"
+    "       coaxid study --spec=FILE --run=KEY --out=DIR";
 
 std::string Absolute(const std::string& path) {
   return fs::absolute(path).lexically_normal().string();
@@ -258,6 +263,28 @@ int RunWithMpi(const MpiWorld& world) {
   return status != 0 ? status : interrupted ? 130 : 0;
 }
 
+// --run=KEY: one run, its logs and record into --out, progress on stderr.
+int OneRun() {
+  const StudySpec spec = LoadStudySpec(FLAGS_spec);
+  int index = -1;
+  for (int i = 0; i < spec.NumRuns(); ++i) {
+    const StudyRunId id = RunIdAt(spec, i);
+    if (RunKey(id.point, id.seed_index) == FLAGS_run) index = i;
+  }
+  if (index < 0) {
+    throw InputError("--run: '" + FLAGS_run + "' is not a run of " + FLAGS_spec + " (keys p0_s0 .. " +
+                     RunKey(spec.sweep.NumPoints() - 1, spec.seed_count - 1) + ")");
+  }
+  fs::create_directories(FLAGS_out);
+  StudyRunDetail detail;
+  detail.logs_dir = FLAGS_out;
+  detail.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  const nlohmann::json record = RunStudyRun(spec, RunIdAt(spec, index), detail);
+  WriteJson(FLAGS_out + "/run.json", record);
+  std::fprintf(stderr, "study: run %s -> %s/run.json\n", FLAGS_run.c_str(), FLAGS_out.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int RunStudy() {
@@ -267,6 +294,7 @@ int RunStudy() {
   RequireFlag(FLAGS_out, "out", kStudyUsage);
   if (FLAGS_export < 0) throw InputError("--export must be a number of jobs >= 1");
   if (FLAGS_export > 0) return Export();
+  if (!FLAGS_run.empty()) return OneRun();
   const MpiWorld world = StartMpiIfLaunched();
   if (world.active) {
     int status = 0;

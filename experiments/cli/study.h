@@ -4,6 +4,7 @@
 //   coaxid study --spec=FILE --out=DIR --export=N      N job specs and scripts in DIR/jobs/
 //   coaxid study --job=DIR/jobs/job_K.yaml [--jobs=N]  one exported job (DIR/parts/job_K.jsonl)
 //   coaxid study --merge --out=DIR                     merge the parts, write the summary
+//   coaxid study --spec=FILE --run=KEY --out=DIR       one run: its logs, record and progress
 //   mpirun -n K coaxid study --spec=FILE --out=DIR     (built with -DCOAXID_MPI=ON)
 //
 // The spec is read and checked before anything is written (bad spec: exit 2,

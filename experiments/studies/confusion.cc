@@ -20,14 +20,20 @@ struct Tally {
 };
 
 struct Rates {
-  std::map<std::string, Tally> single_found_alone;
-  Tally nothing_wrong_added, outside_unexplained, none_false_alarm, pair_both_found;
+  std::map<std::string, Tally> single_found_alone, single_found_alone_visible;
+  Tally nothing_wrong_added, outside_unexplained, outside_nothing_added, none_false_alarm,
+      pair_both_found;
   nlohmann::json Json() const {
-    nlohmann::json single = nlohmann::json::object();
-    for (const auto& [effect, t] : single_found_alone) single[effect] = t.Json();
-    return {{"single_found_alone", single},
+    auto map = [](const std::map<std::string, Tally>& m) {
+      nlohmann::json out = nlohmann::json::object();
+      for (const auto& [effect, t] : m) out[effect] = t.Json();
+      return out;
+    };
+    return {{"single_found_alone", map(single_found_alone)},
+            {"single_found_alone_visible", map(single_found_alone_visible)},
             {"nothing_wrong_added", nothing_wrong_added.Json()},
             {"outside_unexplained", outside_unexplained.Json()},
+            {"outside_nothing_added", outside_nothing_added.Json()},
             {"none_false_alarm", none_false_alarm.Json()},
             {"pair_both_found", pair_both_found.Json()}};
   }
@@ -49,11 +55,17 @@ std::string Percent(const nlohmann::json& rate) {
   return text;
 }
 
+std::string Fixed(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2g", v);
+  return text;
+}
+
 }  // namespace
 
 nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records) {
   std::map<std::string, std::map<std::string, int>> matrix;  // truth -> added -> runs
-  std::map<std::string, Tally> right_by_truth, unexplained_by_truth;
+  std::map<std::string, Tally> right_by_truth, unexplained_by_truth, visible_by_truth;
   Rates all, flight_only, with_balance;
   int failed = 0;
   for (const nlohmann::json& r : records) {
@@ -81,12 +93,17 @@ nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records) {
     for (const std::string& a : added) wrong = wrong || !truth_effects.count(a);
     const bool exact = !wrong && added.size() == truth_effects.size();
     const bool right = truth_class == "outside" ? added.empty() && unexplained : exact;
+    const bool visible = m.contains("declared_rms_over_noise") &&
+                         m["declared_rms_over_noise"].get<double>() >= kVisibleRmsOverNoise;
+    visible_by_truth[truth].Add(visible);
     ++matrix[truth][Join(added, "nothing")];
     right_by_truth[truth].Add(right);
     unexplained_by_truth[truth].Add(unexplained);
     for (Rates* rates : {&all, draw["balance"].get<bool>() ? &with_balance : &flight_only}) {
       rates->nothing_wrong_added.Add(!wrong);
       if (truth_class == "single") rates->single_found_alone[truth].Add(exact);
+      if (truth_class == "single" && visible) rates->single_found_alone_visible[truth].Add(exact);
+      if (truth_class == "outside") rates->outside_nothing_added.Add(added.empty());
       if (truth_class == "pair") rates->pair_both_found.Add(exact);
       if (truth_class == "outside") rates->outside_unexplained.Add(added.empty() && unexplained);
       if (truth_class == "none") rates->none_false_alarm.Add(!added.empty());
@@ -97,9 +114,11 @@ nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records) {
     rows.push_back({{"truth", truth},
                     {"added", columns},
                     {"right", right_by_truth[truth].Json()},
-                    {"unexplained_reported", unexplained_by_truth[truth].Json()}});
+                    {"unexplained_reported", unexplained_by_truth[truth].Json()},
+                    {"visible", visible_by_truth[truth].Json()}});
   }
   return {{"runs_judged", static_cast<int>(records.size()) - failed},
+          {"visible_rms_over_noise", kVisibleRmsOverNoise},
           {"runs_failed", failed},
           {"matrix", rows},
           {"all", all.Json()},
@@ -110,7 +129,11 @@ nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records) {
 std::string ConfusionMarkdown(const nlohmann::json& c) {
   std::string md = "\n## discover: truth -> added (" + std::to_string(c["runs_judged"].get<int>()) +
                    " runs judged, " + std::to_string(c["runs_failed"].get<int>()) +
-                   " failed)\n\nRates as count/runs = share (Wilson 95 % interval, in %).\n\n"
+                   " failed)\n\nRates as count/runs = share (Wilson 95 % interval, in %). A "
+                   "run is *visible* when the declared model's fit leaves some channel's rms at "
+                   "least " + Fixed(c["visible_rms_over_noise"].get<double>()) +
+                   " x its sample-to-sample noise: below that the data do not show the effect "
+                   "to any method.\n\n"
                    "| rate | all | flight only | flight + balance |\n|---|---|---|---|\n";
   auto row = [&](const std::string& name, const std::string& key, const std::string& sub = "") {
     auto get = [&](const char* group) -> nlohmann::json {
@@ -123,12 +146,15 @@ std::string ConfusionMarkdown(const nlohmann::json& c) {
   };
   for (const auto& [effect, rate] : c["all"]["single_found_alone"].items()) {
     row(effect + " alone: found, nothing else", "single_found_alone", effect);
+    row(effect + " alone, visible: found, nothing else", "single_found_alone_visible", effect);
   }
   row("two effects: both found, nothing else", "pair_both_found");
+  row("outside the library: nothing added", "outside_nothing_added");
   row("outside the library: nothing added, unexplained reported", "outside_unexplained");
   row("no effect: false alarm", "none_false_alarm");
   row("nothing wrong added (all runs)", "nothing_wrong_added");
-  md += "\n| truth | runs | right | unexplained reported | added (runs) |\n|---|---|---|---|---|\n";
+  md += "\n| truth | runs | right | visible | unexplained reported | added (runs) |\n"
+        "|---|---|---|---|---|---|\n";
   for (const auto& r : c["matrix"]) {
     std::string added;
     for (const auto& [name, n] : r["added"].items()) {
@@ -136,7 +162,8 @@ std::string ConfusionMarkdown(const nlohmann::json& c) {
     }
     md += "| " + r["truth"].get<std::string>() + " | " +
           std::to_string(r["right"]["runs"].get<int>()) + " | " + Percent(r["right"]) + " | " +
-          Percent(r["unexplained_reported"]) + " | " + added + " |\n";
+          Percent(r["visible"]) + " | " + Percent(r["unexplained_reported"]) + " | " + added +
+          " |\n";
   }
   return md;
 }

@@ -4,9 +4,14 @@
 // judged by, for all runs and split into flight-only and flight + balance:
 //   single_found_alone   per library effect: runs with that effect alone in
 //                        the truth where discover added exactly it;
+//   single_found_alone_visible  the same over the runs where the effect is
+//                        visible: the declared model's fit leaves some
+//                        channel's rms at least kVisibleRmsOverNoise x its
+//                        sample-to-sample noise (below that no method can see
+//                        it: the declared parameters absorb it);
 //   nothing_wrong_added  all runs: nothing added that the truth lacks;
-//   outside_unexplained  outside-library truths: nothing added and at least
-//                        one channel reported unexplained;
+//   outside_nothing_added  outside-library truths: nothing added;
+//   outside_unexplained  ... and at least one channel reported unexplained;
 //   none_false_alarm     no-effect truths: something added;
 //   pair_both_found      two-effect truths: exactly both added.
 // Each rate with its Wilson 95 % interval.
@@ -18,6 +23,10 @@
 #include <nlohmann/json.hpp>
 
 namespace coaxid {
+
+// With n >= 6000 samples a channel's rms / noise of a white residual scatters
+// by about 1 / sqrt(2 n) < 1 %: 1.1 is a misfit, not chance.
+inline constexpr double kVisibleRmsOverNoise = 1.1;
 
 // Records of a randomised study with method discover; runs without a draw or
 // whose discover failed are counted under "failed".

@@ -65,6 +65,7 @@ std::vector<Scenario> PointScenarios(const StudySpec& spec, int point, uint64_t 
           const std::string& t = sweep.types[point];
           s.flight.excitation.type = t == "multisine" ? Excitation::Type::kMultisine
                                      : t == "3211"    ? Excitation::Type::k3211
+                                     : t == "doublet" ? Excitation::Type::kDoublet
                                                       : Excitation::Type::kNone;
         }
         break;

@@ -6,6 +6,9 @@
 // record is the same on any worker, process or machine.
 #pragma once
 
+#include <functional>
+#include <string>
+
 #include <nlohmann/json.hpp>
 
 #include "experiments/studies/spec.h"
@@ -21,6 +24,15 @@ namespace coaxid {
 //                "linear_kf": {"ok": false, "error": "..."}}}
 // A method that fails (ComputationError, or data it cannot use) is recorded
 // as failed with its message: a failure rate is a study result too.
-nlohmann::json RunStudyRun(const StudySpec& spec, const StudyRunId& id);
+// Looking into one run (`coaxid study --run=KEY`): the simulated logs
+// written to logs_dir (held-out ones as held_out_*.csv) and the methods'
+// progress lines. Neither changes the record.
+struct StudyRunDetail {
+  std::string logs_dir;                                // empty: no logs written
+  std::function<void(const std::string&)> progress;  // nullptr: silent
+};
+
+nlohmann::json RunStudyRun(const StudySpec& spec, const StudyRunId& id,
+                           const StudyRunDetail& detail = {});
 
 }  // namespace coaxid

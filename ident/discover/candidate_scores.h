@@ -90,6 +90,10 @@ struct CandidateScore {
   // The channels' excess before the refit, sum of (rms^2 - noise^2) / noise^2
   // (estimation data): a share of almost nothing means nothing.
   double channels_excess = 0;
+  // The excess removed over every channel, sum of (ms_before - ms_after) /
+  // noise^2: how the qualifying refits are ranked (two candidates that
+  // remove all of their own channels' excess differ in what else they fix).
+  double excess_removed_all_channels = 0;
   // The loop's decision on the refit (every criterion of discovery.h).
   bool confirmed = false;
   std::string why_not_confirmed;

@@ -42,13 +42,6 @@ ModelSnapshot Snapshot(const Vehicle& vehicle, const OutputErrorResult& r,
   return s;
 }
 
-OutputErrorResult FitOrThrow(const Vehicle& v, const std::vector<EstimationLog>& logs,
-                             const OutputErrorOptions& o, const std::string& what) {
-  OutputErrorResult r = FitOutputError(v, logs, o);
-  if (!r.usable) throw ComputationError(what + " failed: " + r.why_not_usable);
-  return r;
-}
-
 nlohmann::json TestsJson(const std::vector<ChannelResidualTest>& tests) {
   nlohmann::json j = nlohmann::json::object();
   for (const ChannelResidualTest& t : tests) j[t.channel] = t.ToJson();
@@ -154,6 +147,11 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     s.share_of_excess = est.share;
     s.excess_removed = est.per_channel;
     s.channels_excess = est.excess;
+    std::vector<std::string> all_channels;
+    for (const ChannelResidualTest& t : now.residual_tests) all_channels.push_back(t.channel);
+    const ExcessShare all = ShareOfExcessRemoved(now.fit, refits[k].snapshot.fit,
+                                                 now.residual_tests, all_channels);
+    s.excess_removed_all_channels = all.share * all.excess;
     if (!validation.empty()) {
       s.share_of_excess_held_out =
           ShareOfExcessRemoved(now.validation, refits[k].snapshot.validation,
@@ -287,8 +285,19 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   }
   Say(options, "discover: fitting the declared model (" +
                    std::to_string(declared.parameters.FreeIndices().size()) + " free parameters)");
-  const OutputErrorResult fit =
-      FitOrThrow(start_vehicle, estimation, declared_fit, "the declared model's fit");
+  OutputErrorResult fit = FitOutputError(start_vehicle, estimation, declared_fit);
+  if (!fit.usable && fit.scale_move_failed) {
+    // The declared model needs a scale member beyond its bounds (e.g. the
+    // inertias of a vehicle with an undeclared constant moment): a symptom
+    // (step 7). Fit with the scale held in the solve, so that member meets
+    // its bound and the candidates' refits can move it back.
+    Say(options, "discover: " + fit.why_not_usable +
+                     "; refitting with the scale held in the solve (a symptom of a missing effect)");
+    o.fit.scale_free_in_solve = false;
+    declared_fit.scale_free_in_solve = false;
+    fit = FitOutputError(start_vehicle, estimation, declared_fit);
+  }
+  if (!fit.usable) throw ComputationError("the declared model's fit failed: " + fit.why_not_usable);
   Vehicle current = declared;
   current.parameters = fit.parameters;
   out.baseline = Snapshot(current, fit, estimation, validation, options);
@@ -336,7 +345,8 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
       int best = -1;
       for (size_t k = 0; k < refits.size(); ++k) {
         const CandidateScore& s = scores[shortlist[k]];
-        if (s.confirmed && (best < 0 || s.share_of_excess > scores[shortlist[best]].share_of_excess)) {
+        if (s.confirmed && (best < 0 || s.excess_removed_all_channels >
+                                            scores[shortlist[best]].excess_removed_all_channels)) {
           best = static_cast<int>(k);
         }
       }
@@ -451,8 +461,9 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
              "of min_share_of_excess are refitted jointly (at most max_refits); a refit "
              "qualifies if its cluster-robust Wald p < alpha / refits, no parameter of it sits "
              "at a bound and it removes at least min_share_of_excess of its channels' excess "
-             "error on the estimation and the held-out data; the qualifying refit that removes "
-             "the most is added"},
+             "error (an excess of at least min_channels_excess) on the estimation and the "
+             "held-out data; the qualifying refit that removes the most excess error over all "
+             "channels is added"},
             {"min_share_of_excess", options.min_share_of_excess},
             {"min_channels_excess", options.min_channels_excess},
             {"max_refits", options.max_refits},

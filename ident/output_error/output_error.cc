@@ -405,7 +405,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   // solution is moved onto the held value afterwards at no change in cost
   // (MoveOntoTheGauge).
   ParameterSet solve_parameters = vehicle.parameters;
-  if (!result.gauge.held_member.empty()) {
+  if (!result.gauge.held_member.empty() && options.scale_free_in_solve) {
     solve_parameters.SetEstimated(result.gauge.held_member, true);
   }
   const FreeParameters solve_free(solve_parameters);
@@ -555,6 +555,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   Eigen::VectorXd move;
   if (held >= 0 && !MoveOntoTheGauge(result.gauge, vehicle.parameters, solve_free, theta_scaled,
                                      &move, &result.why_not_usable)) {
+    result.scale_move_failed = true;
     return result;
   }
   const auto covariance_start = Clock::now();

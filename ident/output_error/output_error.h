@@ -52,6 +52,13 @@ struct OutputErrorOptions {
   // Without a balance log or prior fixing the scale, hold d (model.md
   // decision 8; ident/scale_gauge.h), or with kNone leave every member free.
   ScaleAnchor scale_anchor = ScaleAnchor::kHubDistance;
+  // Solve with the scale free and move the solution onto the held value
+  // afterwards (see FitOutputError). false: the held member stays held in
+  // the solve too, so a member that the data push out of its bounds meets
+  // its bound inside the fit instead of failing the move (discover's
+  // fallback: a declared fit that needs such values is a symptom, effects.md
+  // step 7).
+  bool scale_free_in_solve = true;
   // Start (and, with noise_relaxations = 0, keep) these noise std; empty: from the data.
   NoiseWeights noise;
   // Continuity residual scale [state units] of the final and of the coarse
@@ -109,6 +116,9 @@ struct FittedSegments {
 struct OutputErrorResult {
   bool usable = false;
   std::string why_not_usable;
+  // Not usable because moving the solution onto the held scale would take a
+  // member out of its bounds (retry with scale_free_in_solve = false).
+  bool scale_move_failed = false;
   ParameterSet parameters;                  // estimates written back (d not estimated if held)
   IdentifiabilityReport identifiability;    // std, covariance, correlation, null directions
   ScaleGauge gauge;                         // what fixed the scale (model.md decision 8)

@@ -116,20 +116,25 @@ TEST(RandomDraw, SpecsThatCannotBeRandomisedAreRefused) {
 }
 
 nlohmann::json Record(const std::string& truth, const std::string& truth_class, bool balance,
-                      const std::vector<std::string>& added, bool unexplained) {
+                      const std::vector<std::string>& added, bool unexplained,
+                      double rms_over_noise = 1.0) {
   nlohmann::json u = nlohmann::json::array();
   if (unexplained) u.push_back("r");
   return {{"draw", {{"truth", truth}, {"truth_class", truth_class}, {"balance", balance}}},
           {"methods",
-           {{"discover", {{"ok", true}, {"added", added}, {"unexplained", u}}}}}};
+           {{"discover",
+             {{"ok", true},
+              {"added", added},
+              {"unexplained", u},
+              {"declared_rms_over_noise", rms_over_noise}}}}}};
 }
 
 TEST(Confusion, CountsWhatWasAddedAgainstTheTruth) {
   const std::vector<nlohmann::json> records = {
       Record("none", "none", false, {}, false),
       Record("none", "none", true, {"wind"}, false),
-      Record("gyroscopic", "single", false, {"gyroscopic"}, false),
-      Record("gyroscopic", "single", true, {"gyroscopic", "wind"}, false),
+      Record("gyroscopic", "single", false, {"gyroscopic"}, false, 1.5),
+      Record("gyroscopic", "single", true, {"gyroscopic", "wind"}, false, 1.05),
       Record("gyroscopic+wind", "pair", false, {"wind", "gyroscopic"}, false),
       Record("outside:yaw_from_swashplate", "outside", false, {}, true),
       Record("outside:yaw_from_swashplate", "outside", false, {"cg_offset"}, true),
@@ -140,6 +145,10 @@ TEST(Confusion, CountsWhatWasAddedAgainstTheTruth) {
   const nlohmann::json& all = c["all"];
   EXPECT_EQ(all["single_found_alone"]["gyroscopic"]["count"], 1);
   EXPECT_EQ(all["single_found_alone"]["gyroscopic"]["runs"], 2);
+  // Visible: the declared fit left rms >= 1.1 x noise (the first only).
+  EXPECT_EQ(all["single_found_alone_visible"]["gyroscopic"]["count"], 1);
+  EXPECT_EQ(all["single_found_alone_visible"]["gyroscopic"]["runs"], 1);
+  EXPECT_EQ(all["outside_nothing_added"]["count"], 1);
   EXPECT_EQ(all["pair_both_found"]["count"], 1);
   EXPECT_EQ(all["outside_unexplained"]["count"], 1);
   EXPECT_EQ(all["outside_unexplained"]["runs"], 2);
