@@ -140,7 +140,12 @@ RandomDraw DrawRun(const StudySpec& spec, uint64_t seed) {
     std::vector<std::string> names;
     for (const auto& [name, range] : r.outside_strength) names.push_back(name);
     draw.outside = names[std::uniform_int_distribution<size_t>(0, names.size() - 1)(rng)];
-    const double k = Sign(rng) * Uniform(rng, r.outside_strength.at(draw.outside));
+    // The thrust falls with the climb rate (more inflow): k > 0. A k < 0
+    // feeds the climb back into the thrust and the altitude loop cannot hold
+    // the vehicle (measured: 2 of the first 4 such flights left the envelope).
+    const double sign = Sign(rng);  // drawn for both, so the streams stay aligned
+    const double k = (draw.outside == "thrust_from_climb_rate" ? 1.0 : sign) *
+                     Uniform(rng, r.outside_strength.at(draw.outside));
     truth.truth_outside_library[draw.outside] = k;
     strengths[draw.outside] = k;
   }

@@ -35,7 +35,9 @@ struct RandomDraw {
 // bounds allow both). Flight: the spec's flight scenario as template (rate,
 // sensors, noise, controller) with a drawn duration, excitation, swashplate
 // amplitude and four waypoints in the hover or low band (always low with
-// ground_effect). Streams: flight MixSeed(seed, 0), balance 1, held out 2,
+// ground_effect). An outside-library load takes a strength from its range,
+// yaw_from_swashplate with a random sign, thrust_from_climb_rate positive
+// (thrust falling with the climb rate). Streams: flight MixSeed(seed, 0), balance 1, held out 2,
 // the draw itself 2000. Throws ComputationError if no trim exists.
 RandomDraw DrawRun(const StudySpec& spec, uint64_t seed);
 

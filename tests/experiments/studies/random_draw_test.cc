@@ -68,6 +68,11 @@ TEST(RandomDraw, IsAPureFunctionOfTheSeedAndStaysInItsRanges) {
         gyroscopic ? r.gyroscopic_omega_difference_rad_s : r.omega_difference_rad_s;
     EXPECT_GE(std::fabs(difference), range[0] - 0.01) << seed;
     EXPECT_LE(std::fabs(difference), range[1] + 0.01) << seed;
+    // Thrust falls with the climb rate (k > 0); the yaw load takes either sign.
+    const auto thrust = flight.truth_outside_library.find("thrust_from_climb_rate");
+    if (thrust != flight.truth_outside_library.end()) {
+      EXPECT_GE(thrust->second, r.outside_strength.at("thrust_from_climb_rate")[0]);
+    }
     // The held-out flight and the balance log (if drawn) share the truth.
     ASSERT_TRUE(draw.has_held_out);
     EXPECT_EQ(draw.held_out.truth_parameters, flight.truth_parameters);

@@ -197,5 +197,43 @@ TEST(FlightOnly, WhicheverMemberHoldsTheScaleTheRatiosAndOutputsAreTheSame) {
   }
 }
 
+// discover's fallback (OutputErrorOptions::scale_free_in_solve = false): with
+// the scale held in the solve too, a fit that needs no member beyond its
+// bounds reaches the ratios the scale-free solve reaches; when Ixx's upper
+// bound lies below what the data need at the held d, the scale-free fit
+// cannot move its solution onto the held scale (scale_move_failed, saying
+// which member and bound), and the held solve meets that bound instead.
+TEST(FlightOnly, HoldingTheScaleInTheSolveAgreesOrMeetsTheBound) {
+  const Vehicle nominal = Nominal();
+  const Vehicle truth = RandomTruth(nominal, 42);
+  const std::vector<EstimationLog> logs = {MakeEstimationLog(Flight(truth, 6.0, 502))};
+  OutputErrorOptions held_options = Options();
+  held_options.scale_free_in_solve = false;
+  const OutputErrorResult free = FitOutputError(nominal, logs, Options());
+  const OutputErrorResult held = FitOutputError(nominal, logs, held_options);
+  ASSERT_TRUE(free.usable && held.usable) << free.why_not_usable << held.why_not_usable;
+  EXPECT_EQ(held.parameters.Value("d"), nominal.parameters.Value("d"));
+  ASSERT_EQ(held.ratios.size(), free.ratios.size());
+  for (size_t k = 0; k < free.ratios.size(); ++k) {
+    // One minimum reached two ways: far inside the std.
+    EXPECT_NEAR(held.ratios[k].value, free.ratios[k].value, 0.05 * free.ratios[k].std)
+        << free.ratios[k].name;
+  }
+
+  Vehicle tight = nominal;
+  const double ixx_needed = free.parameters.Value("Ixx");
+  Parameter& ixx = tight.parameters.mutable_parameter(tight.parameters.Index("Ixx"));
+  ixx.upper = 0.8 * ixx_needed;
+  ixx.value = std::min(ixx.value, 0.5 * ixx_needed);
+  const OutputErrorResult fails = FitOutputError(tight, logs, Options());
+  EXPECT_FALSE(fails.usable);
+  EXPECT_TRUE(fails.scale_move_failed);
+  EXPECT_NE(fails.why_not_usable.find("Ixx would be"), std::string::npos) << fails.why_not_usable;
+  const OutputErrorResult at_bound = FitOutputError(tight, logs, held_options);
+  ASSERT_TRUE(at_bound.usable) << at_bound.why_not_usable;
+  EXPECT_NEAR(at_bound.parameters.Value("Ixx"), ixx.upper, 1e-6 * ixx.upper);
+  EXPECT_EQ(at_bound.parameters.Value("d"), nominal.parameters.Value("d"));
+}
+
 }  // namespace
 }  // namespace coaxid
