@@ -256,6 +256,7 @@ Figure Confusion(const nlohmann::json& confusion) {
   panel.y_label = "share of runs";
   panel.y_min = 0;
   panel.y_max = 1.05;
+  panel.key = "off";  // one series: the title says what it is
   PlotSeries right{"right", {}, {}, "points pt 7 ps 1.2 lc rgb '#1f77b4'"};
   PlotSeries bars{"", {}, {}, "lines lc rgb '#1f77b4'"};
   auto add = [&](const std::string& label, const nlohmann::json& rate) {
