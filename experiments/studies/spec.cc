@@ -111,7 +111,9 @@ StudySweep ParseSweep(const YAML::Node& node, const std::string& where, const St
 std::array<double, 2> ReadRange(const YAML::Node& node, const std::string& where, double min) {
   const std::vector<double> v = ReadDoubleList(node, where);
   if (v.size() != 2 || !(v[0] <= v[1]) || v[0] < min) {
-    throw InputError(where + ": expected [lo, hi] with " + std::to_string(min) + " <= lo <= hi");
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", min);
+    throw InputError(where + ": expected [lo, hi] with " + text + " <= lo <= hi");
   }
   return {v[0], v[1]};
 }

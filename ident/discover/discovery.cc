@@ -1,10 +1,10 @@
 #include "ident/discover/discovery.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <atomic>
 #include <thread>
 
 #include "core/errors.h"
