@@ -48,26 +48,27 @@ std::map<std::string, ParameterOverride> EffectAtStrength(const std::string& nam
   return out;
 }
 
-// Hover trim |omega1 - omega2| of the truth as the scenario now stands.
-double TrimDifference(const VehicleConfig& config, const Scenario& s, double height) {
-  const Vehicle truth = MakeTruthVehicle(config, s);
-  const HoverTrim trim = TrimHover(truth.model, truth.parameters.Values(), height);
+// Hover trim omega1 - omega2 of `truth` with its gamma2 set to `gamma2`.
+double TrimDifference(Vehicle* truth, double gamma2, double height) {
+  truth->parameters.SetValue("gamma2", gamma2);
+  const HoverTrim trim = TrimHover(truth->model, truth->parameters.Values(), height);
   return trim.input[kOmega1] - trim.input[kOmega2];
 }
 
 // Sets the truth's gamma2 (keeping gamma1) so that the hover trim has
 // omega1 - omega2 = target: at trim gamma1 omega1^2 = -gamma2 omega2^2, and
-// the difference grows with -gamma2 / gamma1, so bisect on that ratio.
+// the difference grows with -gamma2 / gamma1, so bisect on that ratio. The
+// truth vehicle is built once; only gamma2 changes between trims.
 double SetTrimDifference(const VehicleConfig& config, double target, double height, Scenario* s) {
   const double gamma1 = s->truth_parameters.at("gamma1");
+  Vehicle truth = MakeTruthVehicle(config, *s);
   double lo = 0.3, hi = 3.0;
   for (int i = 0; i < 50; ++i) {
     const double mid = 0.5 * (lo + hi);
-    s->truth_parameters["gamma2"] = -gamma1 * mid;
-    (TrimDifference(config, *s, height) < target ? lo : hi) = mid;
+    (TrimDifference(&truth, -gamma1 * mid, height) < target ? lo : hi) = mid;
   }
   s->truth_parameters["gamma2"] = -gamma1 * 0.5 * (lo + hi);
-  return TrimDifference(config, *s, height);
+  return TrimDifference(&truth, s->truth_parameters["gamma2"], height);
 }
 
 std::vector<Waypoint> DrawWaypoints(Rng& rng, const std::array<double, 2>& band, double duration) {
