@@ -21,7 +21,8 @@ struct Tally {
 
 struct Rates {
   std::map<std::string, Tally> single_found_alone, single_found_alone_visible;
-  Tally nothing_wrong_added, outside_unexplained, outside_nothing_added, none_false_alarm,
+  Tally nothing_wrong_added, outside_unexplained, outside_unexplained_visible, outside_nothing_added,
+      none_false_alarm,
       pair_both_found;
   nlohmann::json Json() const {
     auto map = [](const std::map<std::string, Tally>& m) {
@@ -33,6 +34,7 @@ struct Rates {
             {"single_found_alone_visible", map(single_found_alone_visible)},
             {"nothing_wrong_added", nothing_wrong_added.Json()},
             {"outside_unexplained", outside_unexplained.Json()},
+            {"outside_unexplained_visible", outside_unexplained_visible.Json()},
             {"outside_nothing_added", outside_nothing_added.Json()},
             {"none_false_alarm", none_false_alarm.Json()},
             {"pair_both_found", pair_both_found.Json()}};
@@ -106,6 +108,9 @@ nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records) {
       if (truth_class == "outside") rates->outside_nothing_added.Add(added.empty());
       if (truth_class == "pair") rates->pair_both_found.Add(exact);
       if (truth_class == "outside") rates->outside_unexplained.Add(added.empty() && unexplained);
+      if (truth_class == "outside" && visible) {
+        rates->outside_unexplained_visible.Add(added.empty() && unexplained);
+      }
       if (truth_class == "none") rates->none_false_alarm.Add(!added.empty());
     }
   }
@@ -151,6 +156,8 @@ std::string ConfusionMarkdown(const nlohmann::json& c) {
   row("two effects: both found, nothing else", "pair_both_found");
   row("outside the library: nothing added", "outside_nothing_added");
   row("outside the library: nothing added, unexplained reported", "outside_unexplained");
+  row("outside the library, visible: nothing added, unexplained reported",
+      "outside_unexplained_visible");
   row("no effect: false alarm", "none_false_alarm");
   row("nothing wrong added (all runs)", "nothing_wrong_added");
   md += "\n| truth | runs | right | visible | unexplained reported | added (runs) |\n"

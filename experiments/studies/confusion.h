@@ -11,7 +11,8 @@
 //                        it: the declared parameters absorb it);
 //   nothing_wrong_added  all runs: nothing added that the truth lacks;
 //   outside_nothing_added  outside-library truths: nothing added;
-//   outside_unexplained  ... and at least one channel reported unexplained;
+//   outside_unexplained  ... and at least one channel reported unexplained
+//                        (and over the visible runs);
 //   none_false_alarm     no-effect truths: something added;
 //   pair_both_found      two-effect truths: exactly both added.
 // Each rate with its Wilson 95 % interval.
@@ -25,7 +26,9 @@
 namespace coaxid {
 
 // With n >= 6000 samples a channel's rms / noise of a white residual scatters
-// by about 1 / sqrt(2 n) < 1 %: 1.1 is a misfit, not chance.
+// by about 1 / sqrt(2 n) < 1 %: 1.1 is a misfit, not chance. The ratio at
+// which discover calls a structured channel unexplained
+// (DiscoveryOptions::unexplained_rms_ratio; a test holds them equal).
 inline constexpr double kVisibleRmsOverNoise = 1.1;
 
 // Records of a randomised study with method discover; runs without a draw or

@@ -12,9 +12,7 @@
 #include "ident/discover/residual_analysis.h"
 
 namespace coaxid {
-namespace {
 
-// The effect's parameter names ("effect.param").
 std::vector<std::string> EffectParameterNames(const std::string& effect) {
   std::vector<std::string> out;
   for (const auto& spec : EffectLibrary()[EffectIndex(effect)].parameters) {
@@ -22,6 +20,8 @@ std::vector<std::string> EffectParameterNames(const std::string& effect) {
   }
   return out;
 }
+
+namespace {
 
 std::vector<std::string> AllParameterNames(const std::vector<std::string>& effects) {
   std::vector<std::string> out;
@@ -166,6 +166,8 @@ nlohmann::json CandidateScore::ToJson() const {
       {"num_residuals", num_residuals},
       {"num_free_parameters", num_free_parameters}};
   if (!testable) j["why_not_testable"] = why_not_testable;
+  j["blind_at_bounds"] = blind_at_bounds;
+  if (blind_at_bounds) j["restart_values"] = restart_values;
   if (testable) {
     j["linearised_estimates"] = linearised_estimates;
     j["beyond_linear_range"] = beyond_linear_range;
@@ -345,6 +347,42 @@ std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
   return scores;
 }
 
+bool ReachesAny(const std::vector<std::string>& channels, const std::vector<std::string>& of) {
+  return std::any_of(channels.begin(), channels.end(), [&](const std::string& c) {
+    return std::find(of.begin(), of.end(), c) != of.end();
+  });
+}
+
+// Restarts only the parameters whose channels the candidate reaches from
+// there: restarting every parameter at a bound (Ixx at 50 x its value on a
+// flight-only log) left the right candidate's refit worse than its warm start.
+void MarkBlindAtBounds(const Vehicle& fitted, const Vehicle& declared,
+                       const std::map<std::string, std::vector<std::string>>& distorted,
+                       const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
+                       std::vector<CandidateScore>* scores) {
+  for (const auto& [name, channels] : distorted) {
+    if (!declared.parameters.Has(name)) continue;  // an added effect's parameter
+    const Parameter& p = fitted.parameters.Get(name);
+    const double config = declared.parameters.Value(name);
+    if (!(config > p.lower && config < p.upper)) continue;
+    Vehicle inside = fitted;
+    inside.parameters.SetValue(name, config);
+    for (CandidateScore& s : *scores) {
+      const std::vector<std::string> reached = ChannelsReachedBy(
+          CandidateVehicle(inside, s.effect), EffectParameterNames(s.effect), logs, noise);
+      const bool newly = std::any_of(reached.begin(), reached.end(), [&](const std::string& c) {
+        return ReachesAny({c}, channels) && !ReachesAny({c}, s.channels);
+      });
+      if (!newly) continue;
+      s.blind_at_bounds = true;
+      s.restart_values[name] = config;
+      for (const std::string& c : reached) {
+        if (!ReachesAny({c}, s.channels)) s.channels.push_back(c);
+      }
+    }
+  }
+}
+
 bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
                     const OutputErrorOptions& fit_options, CandidateScore* score,
                     OutputErrorResult* refit, CandidatePass* next) {
@@ -356,17 +394,22 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
   // need not leave it (measured: an undeclared ground effect's k_ge stayed
   // at 0 while Cz sat at its bound): it starts at the library's typical
   // strength instead.
+  // A candidate blind at the bounds has no step to start from (its columns
+  // vanish there): it starts at absence, one-sided parameters at typical.
+  // Declared parameters at a bound restart at restart_values.
   const auto& specs = EffectLibrary()[EffectIndex(score->effect)].parameters;
   for (const auto& spec : specs) {
     const std::string name = score->effect + "." + spec.name;
     const auto it = score->linearised_estimates.find(name);
-    if (it == score->linearised_estimates.end()) continue;
+    if (it == score->linearised_estimates.end() && !score->blind_at_bounds) continue;
     const Parameter& p = candidate.parameters.Get(name);
-    const bool pinned_at_absence = (p.value == p.lower && it->second <= p.lower) ||
-                                   (p.value == p.upper && it->second >= p.upper);
+    const double step = score->blind_at_bounds ? p.value : it->second;
+    const bool pinned_at_absence =
+        (p.value == p.lower && step <= p.lower) || (p.value == p.upper && step >= p.upper);
     candidate.parameters.SetValue(
-        name, pinned_at_absence ? std::clamp(std::fabs(spec.typical), p.lower, p.upper) : it->second);
+        name, pinned_at_absence ? std::clamp(std::fabs(spec.typical), p.lower, p.upper) : step);
   }
+  for (const auto& [name, value] : score->restart_values) candidate.parameters.SetValue(name, value);
   // The other parameters start at the current fit, every declared one free
   // (a bound the declared fit pressed one against may let go): the final
   // segment length alone, from the current noise weights.

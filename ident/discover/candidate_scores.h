@@ -72,6 +72,15 @@ struct CandidateScore {
   // Predicted drop of the weighted RSS over the weighted excess of every
   // channel (sum of rms^2 - noise^2, in the fit's weights): the shortlist's key.
   double predicted_share = 0;
+  // Blind at the bounds (effects.md step 7): a declared parameter the
+  // current fit left at a bound distorts channels it reaches only with that
+  // parameter back inside (wind acts on u, v through Cx, Cy: with them at 0
+  // its sensitivities there vanish and its linearised score says nothing).
+  // Its refit starts it at absence with those parameters at restart_values
+  // (their config values); its channels include the ones it reaches from
+  // there.
+  bool blind_at_bounds = false;
+  std::map<std::string, double> restart_values;
   // The refit (shortlisted candidates): joint refit, Wald test.
   bool refitted = false;
   double wald_statistic = 0, wald_p_value = 1;
@@ -100,10 +109,26 @@ struct CandidateScore {
   nlohmann::json ToJson() const;
 };
 
+// Whether any of `channels` is in `of`.
+bool ReachesAny(const std::vector<std::string>& channels, const std::vector<std::string>& of);
+
+// Marks the candidates blind at the bounds (CandidateScore::blind_at_bounds):
+// a declared parameter the current fit (`fitted`) left at a bound distorts
+// channels (`distorted`, per parameter) that the candidate reaches only with
+// that parameter back at its value in `declared` (the config). Sets their
+// restart_values and adds the channels they reach from there.
+void MarkBlindAtBounds(const Vehicle& fitted, const Vehicle& declared,
+                       const std::map<std::string, std::vector<std::string>>& distorted,
+                       const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
+                       std::vector<CandidateScore>* scores);
+
 // Noise-weighted residual sum of squares and its sample count.
 double WeightedRss(const std::vector<EstimationLog>& logs,
                    const std::vector<Eigen::MatrixXd>& model, const NoiseWeights& noise,
                    int* count);
+
+// The effect's parameter names ("effect.param").
+std::vector<std::string> EffectParameterNames(const std::string& effect);
 
 // The vehicle with `effect` added for scoring (parameters free, absent).
 Vehicle CandidateVehicle(const Vehicle& vehicle, const std::string& effect);

@@ -1,7 +1,9 @@
 // The closing loop (../shared/spec/effects.md, issues 6 and 13): fit the
-// declared model, analyse its residuals, score every library effect it lacks
-// by a linearised test, refit the shortlisted ones jointly (those that pass,
-// and those the linearisation says would explain the most of the misfit),
+// declared model (continued past the iteration cap until converged, as is
+// each model the loop accepts), analyse its residuals, score every library
+// effect it lacks by a linearised test, refit the shortlisted ones jointly
+// (those that pass; those blind at the bounds, restarted off them; and those
+// the linearisation says would explain the most of the misfit),
 // and add the refit that is significant (cluster-robust Wald), physically
 // meaningful (no parameter at a bound) and practically significant (it
 // removes at least min_share_of_excess of its channels' excess error, on the
@@ -35,8 +37,11 @@ struct DiscoveryOptions {
   int max_added = 4;           // at most this many effects added
   double window_s = 1.0;       // flight prediction window of the validation errors [s]
   // A structured channel is "unexplained" when its rms exceeds this many
-  // times its sample-to-sample noise estimate.
-  double unexplained_rms_ratio = 1.5;
+  // times its sample-to-sample noise estimate. Measured: with no undeclared
+  // effect the declared fit's largest channel ratio was 1.00-1.04 (51 runs
+  // of the discover_confusion study); loads outside the library left 1.01-4.3,
+  // 10 of 16 yaw loads below the 1.5 used before.
+  double unexplained_rms_ratio = 1.1;
   // Practical significance: the least share of its channels' excess error
   // (rms^2 - noise^2) a candidate's refit must remove, on the estimation and
   // on the held-out data (practical_significance.h).

@@ -535,6 +535,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     result.iterations += summary.iterations.size() > 0 ? summary.iterations.size() - 1 : 0;
     result.final_cost = summary.final_cost;
     result.termination = summary.message;
+    result.hit_iteration_limit = summary.termination_type == ceres::NO_CONVERGENCE;
     if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() ||
         !theta_scaled.allFinite()) {
       result.usable = false;

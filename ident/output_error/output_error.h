@@ -142,6 +142,7 @@ struct OutputErrorResult {
   int iterations = 0;
   double initial_cost = 0, final_cost = 0;
   std::string termination;                  // Ceres' reason for stopping
+  bool hit_iteration_limit = false;         // the last solve stopped at max_iterations
   double seconds = 0;
   nlohmann::json timing;                    // where the time went
 };

@@ -15,6 +15,7 @@
 #include "experiments/simulation/simulate_experiment.h"
 #include "experiments/studies/confusion.h"
 #include "experiments/studies/random_draw.h"
+#include "ident/discover/discovery.h"
 
 namespace coaxid {
 namespace {
@@ -141,7 +142,7 @@ TEST(Confusion, CountsWhatWasAddedAgainstTheTruth) {
       Record("gyroscopic", "single", false, {"gyroscopic"}, false, 1.5),
       Record("gyroscopic", "single", true, {"gyroscopic", "wind"}, false, 1.05),
       Record("gyroscopic+wind", "pair", false, {"wind", "gyroscopic"}, false),
-      Record("outside:yaw_from_swashplate", "outside", false, {}, true),
+      Record("outside:yaw_from_swashplate", "outside", false, {}, true, 1.2),
       Record("outside:yaw_from_swashplate", "outside", false, {"cg_offset"}, true),
       {{"key", "p0_s9"}, {"methods", {{"discover", {{"ok", false}, {"error", "x"}}}}}}};
   const nlohmann::json c = ConfusionSummary(records);
@@ -157,6 +158,8 @@ TEST(Confusion, CountsWhatWasAddedAgainstTheTruth) {
   EXPECT_EQ(all["pair_both_found"]["count"], 1);
   EXPECT_EQ(all["outside_unexplained"]["count"], 1);
   EXPECT_EQ(all["outside_unexplained"]["runs"], 2);
+  EXPECT_EQ(all["outside_unexplained_visible"]["count"], 1);
+  EXPECT_EQ(all["outside_unexplained_visible"]["runs"], 1);
   EXPECT_EQ(all["none_false_alarm"]["count"], 1);
   // Wrong additions: wind (none), wind (gyroscopic), cg_offset (outside).
   EXPECT_EQ(all["nothing_wrong_added"]["count"], 4);
@@ -178,4 +181,9 @@ TEST(Confusion, CountsWhatWasAddedAgainstTheTruth) {
 }
 
 }  // namespace
+// "Visible" in the study is what discover calls unexplained: one ratio.
+TEST(Confusion, VisibleIsDiscoversUnexplainedRatio) {
+  EXPECT_EQ(kVisibleRmsOverNoise, DiscoveryOptions().unexplained_rms_ratio);
+}
+
 }  // namespace coaxid
