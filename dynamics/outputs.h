@@ -11,9 +11,7 @@
 
 namespace coaxid {
 
-// Flight channels: the 12 states in StateIndex order, then ax, ay, az.
-inline constexpr int kNumFlightChannels = kNumStates + 3;
-enum FlightChannel : int { kAx = kNumStates, kAy, kAz };
+// Flight channels (kNumFlightChannels, FlightChannel): dynamics/state.h.
 // Balance channels.
 enum BalanceChannel : int { kBalanceX, kBalanceY, kBalanceZ, kBalanceL, kBalanceM, kBalanceN,
                             kBalanceZ1, kBalanceZ2, kBalanceN1, kBalanceN2, kNumBalanceChannels };
@@ -25,7 +23,8 @@ const char* BalanceChannelName(int channel);
 int FlightChannelIndex(const std::string& column);
 int BalanceChannelIndex(const std::string& column);
 
-// All 15 flight outputs at state x with inputs u.
+// All 15 flight outputs at state x with inputs u: what the sensors read,
+// after any measurement effect (gyro_bias, accel_bias).
 template <typename T>
 void FlightOutputs(const VehicleModel& model, const T* theta, const T* x, const T* u, T* y) {
   for (int i = 0; i < kNumStates; ++i) y[i] = x[i];
@@ -33,6 +32,7 @@ void FlightOutputs(const VehicleModel& model, const T* theta, const T* x, const 
   y[kAx] = f[0];
   y[kAy] = f[1];
   y[kAz] = f[2];
+  model.AddToFlightMeasurements(theta, y);
 }
 
 // All 10 balance outputs with inputs u (eqs. 57-63 with model.md's decisions).

@@ -16,6 +16,10 @@ enum StateIndex : int {
   kP, kQ, kR,           // body rates [rad/s]
   kNumStates
 };
+// The flight channels (dynamics/outputs.h): the 12 states in StateIndex
+// order, then the accelerometer's specific force ax, ay, az.
+inline constexpr int kNumFlightChannels = kNumStates + 3;
+enum FlightChannel : int { kAx = kNumStates, kAy, kAz };
 // "x", "y", ..., "r": the log-format column names of the states.
 const char* StateName(int index);
 

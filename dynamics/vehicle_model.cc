@@ -11,6 +11,11 @@ VehicleModel::VehicleModel(InterferenceModel interference,
   CHECK(interference_ != InterferenceModel::kTable || (table_ && !table_->empty()))
       << "a tabulated interference model needs a table";
   for (int offset : effect_offset_) any_effect_ = any_effect_ || offset >= 0;
+  ForEachEffectType([&](auto effect, int i) {
+    if (effect_offset_[i] >= 0 && decltype(effect)::kChangesFlightMeasurements) {
+      changes_measurements_ = true;
+    }
+  });
 }
 
 // The double instantiation is compiled once here; Jet instantiations are made

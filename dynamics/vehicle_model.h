@@ -39,6 +39,10 @@ class VehicleModel {
   bool EffectEnabled(int library_index) const { return effect_offset_[library_index] >= 0; }
   int EffectOffset(int library_index) const { return effect_offset_[library_index]; }
   InterferenceModel interference() const { return interference_; }
+  // Whether an enabled effect changes what the flight sensors read
+  // (EffectBase::kChangesFlightMeasurements): then the logged state channels
+  // are not the states themselves.
+  bool ChangesFlightMeasurements() const { return changes_measurements_; }
 
   // Simulated truths only (dynamics/truth_only_loads.h): loads outside the
   // library, applied by the double-valued model alone.
@@ -65,6 +69,17 @@ class VehicleModel {
     return Loads(theta, input, Setting::kFlight, x).force_B / theta[kMass];
   }
 
+  // The measurement effects (effects.md, measurement and actuator
+  // candidates): y, the 15 flight channels' true values, becomes what the
+  // sensors log.
+  template <typename T>
+  void AddToFlightMeasurements(const T* theta, T* y) const {
+    if (!changes_measurements_) return;
+    ForEachEnabledEffect(theta, [&](auto effect, const T* p) {
+      decltype(effect)::AddToFlightMeasurements(p, y);
+    });
+  }
+
  private:
   // Loads() with the body-to-earth rotation already known (flight).
   template <typename T>
@@ -83,6 +98,7 @@ class VehicleModel {
   std::shared_ptr<const SigmaTable> table_;
   std::array<int, kNumEffects> effect_offset_;
   bool any_effect_ = false;
+  bool changes_measurements_ = false;
   std::shared_ptr<const TruthOnlyLoads> truth_only_;
 };
 

@@ -10,6 +10,11 @@
 //   AdjustInputs(p, &delta_cx, &delta_cy)   replace the logged swashplate angles
 //   AddWindEarth(p, &wind_E)                 add to the wind in earth axes (eqs. 43-45)
 //   AddLoads(context, p, &loads)             add forces and moments
+//   AddToFlightMeasurements(p, y)            change what a flight log's sensors read
+//                                            (y: the 15 flight channels of
+//                                            dynamics/outputs.h, true values in, logged
+//                                            values out); such an effect also sets
+//                                            kChangesFlightMeasurements = true
 // where p points at the effect's own parameters (in Parameters() order).
 // Register it in effect_library.h.
 #pragma once
@@ -59,12 +64,18 @@ struct EffectContext {
 };
 
 struct EffectBase {
+  // Measurement effects (gyro_bias, accel_bias) set this: the logged state
+  // channels are then no longer the states themselves, and the estimators
+  // take their outputs and Jacobians from the model for every channel.
+  static constexpr bool kChangesFlightMeasurements = false;
   template <typename T>
   static void AdjustInputs(const T* /*p*/, T* /*delta_cx*/, T* /*delta_cy*/) {}
   template <typename T>
   static void AddWindEarth(const T* /*p*/, Vec3<T>* /*wind_E*/) {}
   template <typename T>
   static void AddLoads(const EffectContext<T>& /*c*/, const T* /*p*/, AeroLoads<T>* /*loads*/) {}
+  template <typename T>
+  static void AddToFlightMeasurements(const T* /*p*/, T* /*y*/) {}
 };
 
 }  // namespace coaxid

@@ -9,9 +9,11 @@
 #include <utility>
 #include <vector>
 
+#include "dynamics/effects/accel_bias.h"
 #include "dynamics/effects/cg_offset.h"
 #include "dynamics/effects/gyroscopic.h"
 #include "dynamics/effects/ground_effect.h"
+#include "dynamics/effects/gyro_bias.h"
 #include "dynamics/effects/rotor_damping.h"
 #include "dynamics/effects/rotor_drag.h"
 #include "dynamics/effects/swashplate_bias.h"
@@ -22,7 +24,8 @@ namespace coaxid {
 
 using EffectTypes =
     std::tuple<GyroscopicEffect, RotorDampingEffect, GroundEffect, RotorDragEffect,
-               CgOffsetEffect, SwashplateBiasEffect, WindEffect, WakeInterferenceEffect>;
+               CgOffsetEffect, SwashplateBiasEffect, WindEffect, WakeInterferenceEffect,
+               GyroBiasEffect, AccelBiasEffect>;
 inline constexpr int kNumEffects = std::tuple_size_v<EffectTypes>;
 
 namespace internal {

@@ -163,9 +163,14 @@ Log SimulateFlight(const Vehicle& truth, const FlightScenario& s, uint64_t seed,
   Eigen::VectorXd x = trim.state;
   for (int k = 0; k < steps; ++k) {
     const double t = k * dt;
-    // Noisy measurement of the state at t_k; the controller acts on it.
+    // Noisy measurement of the state at t_k; the controller acts on it. The
+    // truth's measurement effects (a gyro bias) come first: they do not
+    // depend on the inputs.
+    double read[kNumFlightChannels] = {};
+    for (int i = 0; i < kNumStates; ++i) read[i] = x[i];
+    truth.model.AddToFlightMeasurements(theta.data(), read);
     double measured[kNumStates];
-    for (int i = 0; i < kNumStates; ++i) measured[i] = sensed(StateName(i), x[i]);
+    for (int i = 0; i < kNumStates; ++i) measured[i] = sensed(StateName(i), read[i]);
     const Measurement y{measured[kX],   measured[kY],     measured[kZ],   measured[kU],
                         measured[kV],   measured[kW],     measured[kPhi], measured[kTheta],
                         measured[kPsi], measured[kP],     measured[kQ],   measured[kR]};

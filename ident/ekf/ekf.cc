@@ -204,7 +204,11 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
   Eigen::MatrixXd H, HP, PHt, S, K, THt, T(n, n);
   Eigen::VectorXd nu, r_diag;
   Eigen::Matrix<double, kNumFlightChannels, 1> y_hat;
-  Eigen::Matrix<double, 3, Eigen::Dynamic> H_acc;
+  Eigen::Matrix<double, kNumFlightChannels, Eigen::Dynamic> H_model;
+  // A state channel's row of H is a unit vector unless a measurement effect
+  // (a gyro bias) sits between the state and the log.
+  const bool states_are_logged = !pb.vehicle.model.ChangesFlightMeasurements();
+  auto unit_row = [&](int channel) { return channel < kNumStates && states_are_logged; };
   Eigen::LLT<Eigen::MatrixXd> llt;
   std::vector<int> present;  // columns of the log measured in this row
   std::deque<std::pair<double, std::pair<double, int>>> window;  // (t, (nis, dof))
@@ -328,11 +332,11 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
 
       // Update with the channels row k holds.
       present.clear();
-      bool need_acc = false;
+      bool need_model = false;
       for (int c = 0; c < m_all; ++c) {
         if (std::isfinite(log.values(k, c))) {
           present.push_back(c);
-          need_acc = need_acc || log.channels[c] >= kNumStates;
+          need_model = need_model || !unit_row(log.channels[c]);
         }
       }
       const int m = static_cast<int>(present.size());
@@ -340,7 +344,7 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
         const State x_pred = z.head<kNumStates>();
         if (!FlightOutputsAndJacobian(pb.vehicle.model, propagator.theta(), free.indices(),
                                       scales, x_pred, log.inputs.input(k), &y_hat,
-                                      need_acc ? &H_acc : nullptr)) {
+                                      need_model ? &H_model : nullptr)) {
           return fail(t1, log, k, "output model not finite (state or parameters blown up)");
         }
         H.setZero(m, n);
@@ -353,19 +357,19 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
           if (IsAngleChannel(channel)) innovation = WrapAngle(innovation);
           nu[j] = innovation;
           r_diag[j] = R[c];
-          if (channel < kNumStates) {
+          if (unit_row(channel)) {
             H(j, channel) = 1.0;
           } else {
-            H.row(j) = H_acc.row(channel - kAx);
+            H.row(j) = H_model.row(channel);
           }
         }
         // H is sparse: a state channel's row is a unit vector. X H^T takes
-        // columns of X for those, a product only for accelerometer rows.
+        // columns of X for those, a product only for the model's rows.
         auto times_Ht = [&](const Eigen::MatrixXd& X, Eigen::MatrixXd* out) {
           out->resize(X.rows(), m);
           for (int j = 0; j < m; ++j) {
             const int channel = log.channels[present[j]];
-            if (channel < kNumStates) {
+            if (unit_row(channel)) {
               out->col(j) = X.col(channel);
             } else {
               out->col(j).noalias() = X * H.row(j).transpose();

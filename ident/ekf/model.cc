@@ -217,16 +217,16 @@ bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& 
                               const Eigen::VectorXd& dtheta_dp, const State& x,
                               const InputVector& u,
                               Eigen::Matrix<double, kNumFlightChannels, 1>* y,
-                              Eigen::Matrix<double, 3, Eigen::Dynamic>* H_acc) {
+                              Eigen::Matrix<double, kNumFlightChannels, Eigen::Dynamic>* H) {
   FlightOutputs(model, theta.data(), x.data(), u.data(), y->data());
   if (!y->allFinite()) return false;
-  if (H_acc == nullptr) return true;
+  if (H == nullptr) return true;
   // Derivative directions kChunk at a time (as dynamics/model_jacobian.cc).
   constexpr int kChunk = 16;
   using Jet = ceres::Jet<double, kChunk>;
   const int np = static_cast<int>(free_indices.size());
   const int directions = kNumStates + np;
-  H_acc->resize(3, directions);
+  H->resize(kNumFlightChannels, directions);
   std::vector<Jet> theta_jet(theta.size());
   Jet x_jet[kNumStates], u_jet[kNumInputs], y_jet[kNumFlightChannels];
   for (int i = 0; i < kNumInputs; ++i) u_jet[i] = Jet(u[i]);
@@ -242,13 +242,11 @@ bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& 
       }
     }
     FlightOutputs(model, theta_jet.data(), x_jet, u_jet, y_jet);
-    for (int row = 0; row < 3; ++row) {
-      for (int dir = first; dir < last; ++dir) {
-        (*H_acc)(row, dir) = y_jet[kAx + row].v[dir - first];
-      }
+    for (int row = 0; row < kNumFlightChannels; ++row) {
+      for (int dir = first; dir < last; ++dir) (*H)(row, dir) = y_jet[row].v[dir - first];
     }
   }
-  return H_acc->allFinite();
+  return H->allFinite();
 }
 
 }  // namespace coaxid

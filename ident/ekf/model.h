@@ -148,16 +148,17 @@ void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
                          const Eigen::Matrix<double, kNumStates, 1>& qx, const Eigen::VectorXd& qp,
                          double h, EkfTransition* out);
 
-// The 15 flight outputs (dynamics/outputs.h) at (x, u) and, if H_acc is not
-// null, the accelerometer rows' Jacobian with respect to z = [x; p]
-// (3 x (12 + np); dtheta_dp: d theta_k / d p_k), by autodiff of FlightOutputs. The state channels'
-// Jacobian is the identity and is not formed. Returns false if a value is not
-// finite.
+// The 15 flight outputs (dynamics/outputs.h) at (x, u) and, if H is not
+// null, their Jacobian with respect to z = [x; p] (15 x (12 + np);
+// dtheta_dp: d theta_k / d p_k), by autodiff of FlightOutputs. Without a
+// measurement effect (VehicleModel::ChangesFlightMeasurements) the state
+// channels' rows are unit vectors, and the filter uses them as such. Returns
+// false if a value is not finite.
 bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& theta,
                               const std::vector<int>& free_indices,
                               const Eigen::VectorXd& dtheta_dp, const State& x,
                               const InputVector& u,
                               Eigen::Matrix<double, kNumFlightChannels, 1>* y,
-                              Eigen::Matrix<double, 3, Eigen::Dynamic>* H_acc);
+                              Eigen::Matrix<double, kNumFlightChannels, Eigen::Dynamic>* H);
 
 }  // namespace coaxid

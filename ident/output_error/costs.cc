@@ -131,16 +131,19 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
 
   double y[kNumFlightChannels];
   Eigen::MatrixXd dydx, dydp;
+  // The accelerometer, and every channel under a measurement effect (a gyro
+  // bias), needs the output model and its Jacobians; plain states are read
+  // directly.
+  const bool states_are_logged = !model_.ChangesFlightMeasurements();
   size_t term = 0;
   for (int k : rows_) {
     const int i = k - first_;
     const Eigen::VectorXd& x = trajectory.states[i];
-    // The accelerometer needs the model (and its Jacobians); states are read directly.
-    bool accelerometer = false;
+    bool needs_model = !states_are_logged;
     for (size_t t = term; t < terms_.size() && terms_[t].row == k; ++t) {
-      accelerometer = accelerometer || terms_[t].channel >= kNumStates;
+      needs_model = needs_model || terms_[t].channel >= kNumStates;
     }
-    if (accelerometer) {
+    if (needs_model) {
       if (!FlightOutputJacobians(model_, theta, x.data(), log_.inputs.input(k), free_.indices(),
                                  y, sensitivities ? &dydx : nullptr,
                                  want_theta ? &dydp : nullptr)) {
@@ -154,7 +157,7 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
       residuals[term] = t.weight * (y[t.channel] - log_.values(k, t.column));
       if (!sensitivities) continue;
       const Eigen::MatrixXd& S = trajectory.sensitivities[i];  // 12 x (12 + P)
-      if (t.channel < kNumStates) {
+      if (t.channel < kNumStates && states_are_logged) {
         if (want_state) J_state.row(term) = t.weight * S.block(t.channel, 0, 1, kNumStates);
         if (want_theta) {
           J_theta.row(term) =

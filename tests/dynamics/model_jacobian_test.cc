@@ -34,6 +34,7 @@
 #include "core/input_hold.h"
 #include "core/parameters.h"
 #include "dynamics/effects/effect_library.h"
+#include "dynamics/outputs.h"
 #include "dynamics/state.h"
 #include "dynamics/vehicle.h"
 #include "dynamics/vehicle_model.h"
@@ -169,6 +170,56 @@ TEST(ModelJacobianTest, AllEffectsMatchCentralDifferences) {
   const Vehicle v = AllEffects();
   ASSERT_EQ(v.EffectNames().size(), EffectLibrary().size());
   CheckVehicle(v, 2002u, "all effects");
+}
+
+// FlightOutputJacobians against central differences of FlightOutputs, every
+// effect on (the measurement effects put unit columns on their channels; the
+// output model's Jacobians feed output-error, the EKF and discover). Same
+// steps and tolerances as the derivative: the accelerometer's terms are of
+// the size of g (RowTermScale 10), the state channels' of 1.
+TEST(ModelJacobianTest, FlightOutputsMatchCentralDifferencesWithAllEffects) {
+  const Vehicle v = AllEffects();
+  ASSERT_TRUE(v.model.ChangesFlightMeasurements());
+  const Eigen::VectorXd theta = v.parameters.Values();
+  std::vector<int> all(v.parameters.size());
+  for (int i = 0; i < v.parameters.size(); ++i) all[i] = i;
+  using Outputs = Eigen::Matrix<double, kNumFlightChannels, 1>;
+  auto outputs = [&](const Eigen::VectorXd& th, const State& x, const InputVector& u) {
+    Outputs y;
+    FlightOutputs(v.model, th.data(), x.data(), u.data(), y.data());
+    return y;
+  };
+  auto row_scale = [](int i) { return i >= kAx ? 10.0 : 1.0; };
+  for (const Case& c : NearHoverCases(4004u, 4)) {
+    double y[kNumFlightChannels];
+    Eigen::MatrixXd dydx, dydp;
+    ASSERT_TRUE(FlightOutputJacobians(v.model, theta, c.x.data(), c.input, all, y, &dydx, &dydp));
+    ASSERT_EQ(dydx.rows(), kNumFlightChannels);
+    ASSERT_EQ(dydp.cols(), v.parameters.size());
+    auto check = [&](const Eigen::VectorXd& ad, const Outputs& fd, double h, const std::string& w) {
+      const double col_scale = fd.cwiseAbs().maxCoeff();
+      for (int i = 0; i < kNumFlightChannels; ++i) {
+        EXPECT_NEAR(ad[i], fd[i], kRelTol * col_scale + 100 * kEps * row_scale(i) / h)
+            << "d(" << FlightChannelName(i) << ")/d(" << w << ")";
+      }
+    };
+    for (int j = 0; j < kNumStates; ++j) {
+      const double h = kRelStep * std::max(std::fabs(c.x[j]), 1.0);
+      State xp = c.x, xm = c.x;
+      xp[j] += h;
+      xm[j] -= h;
+      check(dydx.col(j), (outputs(theta, xp, c.input) - outputs(theta, xm, c.input)) / (2 * h), h,
+            StateName(j));
+    }
+    for (int j = 0; j < v.parameters.size(); ++j) {
+      const double h = kRelStep * std::max(std::fabs(theta[j]), v.parameters[j].scale);
+      Eigen::VectorXd tp = theta, tm = theta;
+      tp[j] += h;
+      tm[j] -= h;
+      check(dydp.col(j), (outputs(tp, c.x, c.input) - outputs(tm, c.x, c.input)) / (2 * h), h,
+            v.parameters[j].name);
+    }
+  }
 }
 
 // A subset of parameters in arbitrary order: column k is the derivative with

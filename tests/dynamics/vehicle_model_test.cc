@@ -39,6 +39,7 @@
 #include "core/vehicle_config.h"
 #include "dynamics/effects/effect_library.h"
 #include "dynamics/interference_loss.h"
+#include "dynamics/outputs.h"
 #include "dynamics/state.h"
 #include "dynamics/vehicle.h"
 
@@ -892,7 +893,8 @@ TEST(VehicleModelJetTest, JetValuePartsEqualDoubleWithAllEffects) {
 // value inside its bounds.
 TEST(VehicleModelJetTest, LibraryHoldsTheEffectsOfTheSpec) {
   for (const char* name : {"gyroscopic", "rotor_damping", "ground_effect", "rotor_drag",
-                           "cg_offset", "swashplate_bias", "wind", "wake_interference"}) {
+                           "cg_offset", "swashplate_bias", "wind", "wake_interference",
+                           "gyro_bias", "accel_bias"}) {
     const int i = EffectIndex(name);
     ASSERT_GE(i, 0) << name;
     bool any_visible = false;
@@ -902,6 +904,49 @@ TEST(VehicleModelJetTest, LibraryHoldsTheEffectsOfTheSpec) {
       any_visible = any_visible || spec.typical != 0.0;
     }
     EXPECT_TRUE(any_visible) << name << ": typical values must make the effect visible";
+  }
+}
+
+// The measurement effects (effects.md) change what the sensors log and
+// nothing else: logged p, q, r move by exactly (b_p, b_q, b_r) and ax, ay, az
+// by (b_ax, b_ay, b_az), every other channel and the dynamics not at all, in
+// double and in Jet (whose derivative along each bias is 1 on its channel).
+TEST(VehicleModelJetTest, MeasurementBiasesMoveOnlyTheirChannels) {
+  const Vehicle base = DistinctVehicle();
+  const Vehicle v = WithTypicalEffect(WithTypicalEffect(base, "gyro_bias"), "accel_bias");
+  ASSERT_FALSE(base.model.ChangesFlightMeasurements());
+  ASSERT_TRUE(v.model.ChangesFlightMeasurements());
+  ASSERT_FALSE(WithTypicalEffect(base, "wind").model.ChangesFlightMeasurements());
+  const Eigen::VectorXd th_base = base.parameters.Values(), th = v.parameters.Values();
+  const State x = FlightState();
+  double y_base[kNumFlightChannels], y[kNumFlightChannels];
+  FlightOutputs(base.model, th_base.data(), x.data(), kFlightInput.data(), y_base);
+  FlightOutputs(v.model, th.data(), x.data(), kFlightInput.data(), y);
+  const std::map<int, std::string> bias = {{kP, "gyro_bias.b_p"},   {kQ, "gyro_bias.b_q"},
+                                           {kR, "gyro_bias.b_r"},   {kAx, "accel_bias.b_ax"},
+                                           {kAy, "accel_bias.b_ay"}, {kAz, "accel_bias.b_az"}};
+  for (int c = 0; c < kNumFlightChannels; ++c) {
+    const auto it = bias.find(c);
+    const double b = it == bias.end() ? 0.0 : Param(v, it->second);
+    if (it != bias.end()) ASSERT_NE(b, 0.0) << it->second;
+    EXPECT_NEAR(y[c] - y_base[c], b, 1e-15 * (1 + std::fabs(y_base[c]))) << c;
+  }
+  ExpectStateNear(EvalDerivative<double>(v.model, th, x, kFlightInput),
+                  EvalDerivative<double>(base.model, th_base, x, kFlightInput), "biases");
+  // Jet: seed each bias in turn.
+  using J = ceres::Jet<double, 1>;
+  for (const auto& [channel, name] : bias) {
+    std::vector<J> th_jet(th.size());
+    for (int i = 0; i < th.size(); ++i) th_jet[i] = J(th[i]);
+    th_jet[v.parameters.IndexOrThrow(name)].v[0] = 1.0;
+    J xs[kNumStates], in[kNumInputs], out[kNumFlightChannels];
+    for (int i = 0; i < kNumStates; ++i) xs[i] = J(x[i]);
+    for (int k = 0; k < kNumInputs; ++k) in[k] = J(kFlightInput[k]);
+    FlightOutputs(v.model, th_jet.data(), xs, in, out);
+    for (int c = 0; c < kNumFlightChannels; ++c) {
+      EXPECT_EQ(out[c].v[0], c == channel ? 1.0 : 0.0) << name << " on channel " << c;
+      EXPECT_NEAR(out[c].a, y[c], 1e-14 * (1 + std::fabs(y[c]))) << c;
+    }
   }
 }
 

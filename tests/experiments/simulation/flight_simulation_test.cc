@@ -2,9 +2,12 @@
 // 60 s under excitation and sensor noise, and the logged outputs are the
 // truth plus noise of the configured size.
 #include <cmath>
+#include <map>
+#include <string>
 
 #include <gtest/gtest.h>
 
+#include "core/input_hold.h"
 #include "core/statistics.h"
 #include "dynamics/trim.h"
 #include "experiments/simulation/simulate_experiment.h"
@@ -70,6 +73,44 @@ TEST(FlightSimulation, NoiseFreeHoverStaysAtTrim) {
     ASSERT_NEAR(log.Column("omega1")[k], trim.input[0], 1e-4);
     ASSERT_NEAR(log.Column("az")[k], -vehicle.parameters.Value("g"), 1e-6);
   }
+}
+
+// A truth with measurement effects (gyro_bias, accel_bias) logs the biased
+// readings in every channel the effect names, the states included (the
+// controller flies on them): at row 0, the trim, noise-free sensors read
+// p, q, r = the gyro biases, and the specific force of the unbiased model at
+// the trim state with row 0's logged inputs (the controller already answers
+// the biased rates) plus the accelerometer biases.
+TEST(FlightSimulation, MeasurementEffectsAreWhatTheSensorsLog) {
+  const Vehicle vehicle = ReferenceVehicle();
+  Scenario scenario;
+  scenario.flight.duration_s = 1;
+  scenario.flight.excitation.type = Excitation::Type::kNone;
+  scenario.flight.noise_std.clear();
+  std::map<std::string, ParameterOverride> gyro, accel;
+  gyro["b_p"].value = 0.02;
+  gyro["b_q"].value = -0.015;
+  gyro["b_r"].value = 0.01;
+  accel["b_ax"].value = 0.15;
+  accel["b_ay"].value = -0.1;
+  accel["b_az"].value = 0.2;
+  scenario.truth_effects = {{"gyro_bias", gyro}, {"accel_bias", accel}};
+  const Vehicle truth = MakeTruthVehicle(vehicle.config, scenario);
+  const Log log = SimulateFlight(truth, scenario.flight, 1);
+  EXPECT_NEAR(log.Column("p")[0], 0.02, 1e-12);
+  EXPECT_NEAR(log.Column("q")[0], -0.015, 1e-12);
+  EXPECT_NEAR(log.Column("r")[0], 0.01, 1e-12);
+  EXPECT_NEAR(log.Column("phi")[0], 0.0, 1e-12);
+  const Eigen::VectorXd theta = vehicle.parameters.Values();
+  const HoverTrim trim = TrimHover(vehicle.model, theta, 1.5);
+  const InputVector u0 = InputHold::FromLog(log).input(0);
+  const Vec3<double> f = vehicle.model.SpecificForce(theta.data(), trim.state.data(), u0.data());
+  EXPECT_NEAR(log.Column("ax")[0], f[0] + 0.15, 1e-9);
+  EXPECT_NEAR(log.Column("ay")[0], f[1] - 0.1, 1e-9);
+  EXPECT_NEAR(log.Column("az")[0], f[2] + 0.2, 1e-9);
+  // The controller answers the biased rates at once: row 0's swashplate is
+  // off the trim (else the check above would not see the inputs).
+  EXPECT_NE(u0[kDeltaCx], trim.input[kDeltaCx]);
 }
 
 }  // namespace

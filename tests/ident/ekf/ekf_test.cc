@@ -18,6 +18,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 #include <random>
 
 #include <glog/logging.h>
@@ -386,44 +387,96 @@ TEST(EkfTest, ZeroOrderTransitionMatchesVanLoan) {
 }
 
 TEST(EkfTest, OutputJacobianMatchesCentralDifferences) {
-  // Accelerometer rows of H against central differences of FlightOutputs.
+  // All 15 rows of H against central differences of FlightOutputs, for the
+  // truth model and for it with gyro and accelerometer biases (then the
+  // state channels' rows carry the bias columns, and the filter uses them).
   // Step 1e-6 in each (scaled) coordinate; truncation ~1e-12, rounding
   // ~eps |y| / h ~ 1e-9 (|y| ~ 10 m/s^2): tolerance 1e-6 absolute on entries
   // of order 0.1 to 10.
   const SimulatedFlight& f = Flight();
-  std::vector<int> free;
-  for (int i = kAlpha; i < kNumBaseParameters; ++i) free.push_back(i);
-  Eigen::VectorXd scales(free.size());
-  for (size_t k = 0; k < free.size(); ++k) scales[k] = f.truth.parameters[free[k]].scale;
-  const Eigen::VectorXd theta = f.truth.parameters.Values();
-  const InputHold inputs = InputHold::FromLog(f.log);
-  for (int row : {500, 6000}) {
-    const State x = f.truth_states[row];
-    const InputVector u = inputs.input(row);
-    Eigen::Matrix<double, kNumFlightChannels, 1> y;
-    Eigen::Matrix<double, 3, Eigen::Dynamic> H;
-    ASSERT_TRUE(FlightOutputsAndJacobian(f.truth.model, theta, free, scales, x, u, &y, &H));
-    ASSERT_EQ(H.cols(), kNumStates + static_cast<int>(free.size()));
-    const double step = 1e-6;
-    for (int dir = 0; dir < H.cols(); ++dir) {
-      State xp = x, xm = x;
-      Eigen::VectorXd tp = theta, tm = theta;
-      if (dir < kNumStates) {
-        xp[dir] += step;
-        xm[dir] -= step;
-      } else {
-        tp[free[dir - kNumStates]] += step * scales[dir - kNumStates];
-        tm[free[dir - kNumStates]] -= step * scales[dir - kNumStates];
-      }
-      double yp[kNumFlightChannels], ym[kNumFlightChannels];
-      FlightOutputs(f.truth.model, tp.data(), xp.data(), u.data(), yp);
-      FlightOutputs(f.truth.model, tm.data(), xm.data(), u.data(), ym);
-      for (int i = 0; i < 3; ++i) {
-        EXPECT_NEAR(H(i, dir), (yp[kAx + i] - ym[kAx + i]) / (2 * step), 1e-6)
-            << "row " << row << " output " << i << " direction " << dir;
+  std::map<std::string, ParameterOverride> gyro, accel;
+  gyro["b_p"].value = 0.02;
+  accel["b_az"].value = 0.2;
+  const Vehicle biased = WithEffect(WithEffect(f.truth, "gyro_bias", gyro), "accel_bias", accel);
+  for (const Vehicle* vehicle : {&f.truth, &biased}) {
+    std::vector<int> free;
+    for (int i = kAlpha; i < vehicle->parameters.size(); ++i) free.push_back(i);
+    Eigen::VectorXd scales(free.size());
+    for (size_t k = 0; k < free.size(); ++k) scales[k] = vehicle->parameters[free[k]].scale;
+    const Eigen::VectorXd theta = vehicle->parameters.Values();
+    const InputHold inputs = InputHold::FromLog(f.log);
+    for (int row : {500, 6000}) {
+      const State x = f.truth_states[row];
+      const InputVector u = inputs.input(row);
+      Eigen::Matrix<double, kNumFlightChannels, 1> y;
+      Eigen::Matrix<double, kNumFlightChannels, Eigen::Dynamic> H;
+      ASSERT_TRUE(FlightOutputsAndJacobian(vehicle->model, theta, free, scales, x, u, &y, &H));
+      ASSERT_EQ(H.cols(), kNumStates + static_cast<int>(free.size()));
+      const double step = 1e-6;
+      for (int dir = 0; dir < H.cols(); ++dir) {
+        State xp = x, xm = x;
+        Eigen::VectorXd tp = theta, tm = theta;
+        if (dir < kNumStates) {
+          xp[dir] += step;
+          xm[dir] -= step;
+        } else {
+          tp[free[dir - kNumStates]] += step * scales[dir - kNumStates];
+          tm[free[dir - kNumStates]] -= step * scales[dir - kNumStates];
+        }
+        double yp[kNumFlightChannels], ym[kNumFlightChannels];
+        FlightOutputs(vehicle->model, tp.data(), xp.data(), u.data(), yp);
+        FlightOutputs(vehicle->model, tm.data(), xm.data(), u.data(), ym);
+        for (int i = 0; i < kNumFlightChannels; ++i) {
+          EXPECT_NEAR(H(i, dir), (yp[i] - ym[i]) / (2 * step), 1e-6)
+              << "row " << row << " output " << i << " direction " << dir;
+        }
       }
     }
   }
+}
+
+// Measurement effects in the filter (issue 14): a flight whose gyros and
+// accelerometers carry biases (the library's typical values, 1-2 x the
+// sensor noise), the EKF with gyro_bias and accel_bias declared and started
+// at 0: every bias within 3 std of the truth, and each std well below the
+// bias itself (a filter that ignored the state channels' bias columns in H
+// would leave them at their prior).
+TEST(EkfTest, EstimatesSensorBiasesWithinThreeStd) {
+  const VehicleConfig config = LoadVehicleConfig(Source("configs/glmav.yaml"));
+  Scenario scenario = LoadScenario(Source("configs/scenarios/flight.yaml"));
+  std::map<std::string, ParameterOverride> gyro, accel, absent;
+  gyro["b_p"].value = 0.02;
+  gyro["b_q"].value = -0.015;
+  gyro["b_r"].value = 0.01;
+  accel["b_ax"].value = 0.15;
+  accel["b_ay"].value = -0.1;
+  accel["b_az"].value = 0.2;
+  scenario.truth_effects = {{"gyro_bias", gyro}, {"accel_bias", accel}};
+  scenario.flight.duration_s = 30;
+  const Vehicle truth = MakeTruthVehicle(config, scenario);
+  const Log log = SimulateFlight(truth, scenario.flight, 12);
+  Vehicle declared = MakeVehicle(config);
+  declared.parameters.SetValue("d", truth.parameters.Value("d"));
+  declared.parameters.SetEstimated("d", false);
+  declared = WithEffect(WithEffect(declared, "gyro_bias", absent), "accel_bias", absent);
+  EkfOptions options;
+  options.smoother = true;
+  const EkfResult r =
+      RunEkf(declared, {MakeEstimationLog(log)}, TruthNoise(scenario.flight), options);
+  ASSERT_TRUE(r.usable) << r.failure;
+  int checked = 0;
+  for (size_t k = 0; k < r.free_names.size(); ++k) {
+    const std::string& name = r.free_names[k];
+    if (name.rfind("gyro_bias.", 0) != 0 && name.rfind("accel_bias.", 0) != 0) continue;
+    const double want = truth.parameters.Value(name);
+    EXPECT_LE(std::fabs(r.estimate[k] - want), 3 * r.estimate_std[k])
+        << name << ": " << r.estimate[k] << " +- " << r.estimate_std[k] << ", truth " << want;
+    EXPECT_LT(r.estimate_std[k], 0.25 * std::fabs(want)) << name;
+    const double prior = std::sqrt(r.prior_covariance(k, k)) * r.scales[k];
+    EXPECT_LT(r.estimate_std[k], 0.2 * prior) << name;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 6);
 }
 
 TEST(EkfTest, MissingChannelsAndIrregularRows) {

@@ -2,7 +2,9 @@
 #include "ident/output_error/output_error.h"
 
 #include <cmath>
+#include <map>
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -244,48 +246,59 @@ TEST(OutputError, ColouredResidualCorrectionMatchesMonteCarloSpread) {
 }
 
 // The sensitivity-based Jacobian of a segment block against central
-// differences of its residuals.
+// differences of its residuals: the paper's model (states read directly),
+// and with the measurement effects gyro_bias and accel_bias declared (every
+// channel then through the output model, the bias columns included).
 TEST(OutputError, SegmentJacobianEqualsFiniteDifferences) {
   const Vehicle nominal = Nominal();
   const Vehicle truth = MakeTruthVehicle(nominal.config, TruthScenario());
   const EstimationLog log = MakeEstimationLog(FlightLog(truth, 1.0, 9, true));
-  const FreeParameters free(nominal.parameters);
-  std::vector<double> channel_std(log.NumChannels(), 0.01);
-  IntegratorOptions integrator = OutputErrorOptions::DefaultIntegrator();
-  integrator.relative_tolerance = 1e-10;
-  integrator.absolute_tolerance = 1e-12;
-  FlightSegmentCost cost(nominal.model, free, log, 20, 120, true, channel_std, 1e-3, integrator);
-  Eigen::VectorXd s0 = InitialStateFromLog(log, 20), s1 = InitialStateFromLog(log, 120);
-  Eigen::VectorXd theta = free.ScaledValues();
-  std::vector<double*> blocks = {s0.data(), theta.data(), s1.data()};
-  const int m = cost.num_residuals();
-  std::vector<int> sizes = {kNumStates, free.size(), kNumStates};
-  std::vector<std::vector<double>> J(3);
-  std::vector<double*> jac(3);
-  for (int b = 0; b < 3; ++b) {
-    J[b].resize(m * sizes[b]);
-    jac[b] = J[b].data();
-  }
-  std::vector<double> r(m), rp(m), rm(m);
-  ASSERT_TRUE(cost.Evaluate(blocks.data(), r.data(), jac.data()));
-  for (int b = 0; b < 3; ++b) {
-    for (int j = 0; j < sizes[b]; ++j) {
-      const double saved = blocks[b][j];
-      // States in SI units and scaled parameters are O(1): step 1e-6 gives
-      // truncation ~1e-12 and round-off ~1e-10/1e-6 = 1e-4 relative at worst.
-      const double h = 1e-6;
-      blocks[b][j] = saved + h;
-      ASSERT_TRUE(cost.Evaluate(blocks.data(), rp.data(), nullptr));
-      blocks[b][j] = saved - h;
-      ASSERT_TRUE(cost.Evaluate(blocks.data(), rm.data(), nullptr));
-      blocks[b][j] = saved;
-      double scale = 1e-8, err = 0;
-      for (int i = 0; i < m; ++i) {
-        const double fd = (rp[i] - rm[i]) / (2 * h);
-        scale = std::max(scale, std::fabs(fd));
-        err = std::max(err, std::fabs(fd - J[b][i * sizes[b] + j]));
+  std::map<std::string, ParameterOverride> gyro, accel;
+  gyro["b_q"].value = 0.01;
+  accel["b_ax"].value = 0.1;
+  const Vehicle biased =
+      WithEffect(WithEffect(nominal, "gyro_bias", gyro), "accel_bias", accel);
+  ASSERT_TRUE(biased.model.ChangesFlightMeasurements());
+  for (const Vehicle* model : {&nominal, &biased}) {
+    SCOPED_TRACE(model->model.ChangesFlightMeasurements() ? "with sensor biases" : "paper's model");
+    const FreeParameters free(model->parameters);
+    std::vector<double> channel_std(log.NumChannels(), 0.01);
+    IntegratorOptions integrator = OutputErrorOptions::DefaultIntegrator();
+    integrator.relative_tolerance = 1e-10;
+    integrator.absolute_tolerance = 1e-12;
+    FlightSegmentCost cost(model->model, free, log, 20, 120, true, channel_std, 1e-3, integrator);
+    Eigen::VectorXd s0 = InitialStateFromLog(log, 20), s1 = InitialStateFromLog(log, 120);
+    Eigen::VectorXd theta = free.ScaledValues();
+    std::vector<double*> blocks = {s0.data(), theta.data(), s1.data()};
+    const int m = cost.num_residuals();
+    std::vector<int> sizes = {kNumStates, free.size(), kNumStates};
+    std::vector<std::vector<double>> J(3);
+    std::vector<double*> jac(3);
+    for (int b = 0; b < 3; ++b) {
+      J[b].resize(m * sizes[b]);
+      jac[b] = J[b].data();
+    }
+    std::vector<double> r(m), rp(m), rm(m);
+    ASSERT_TRUE(cost.Evaluate(blocks.data(), r.data(), jac.data()));
+    for (int b = 0; b < 3; ++b) {
+      for (int j = 0; j < sizes[b]; ++j) {
+        const double saved = blocks[b][j];
+        // States in SI units and scaled parameters are O(1): step 1e-6 gives
+        // truncation ~1e-12 and round-off ~1e-10/1e-6 = 1e-4 relative at worst.
+        const double h = 1e-6;
+        blocks[b][j] = saved + h;
+        ASSERT_TRUE(cost.Evaluate(blocks.data(), rp.data(), nullptr));
+        blocks[b][j] = saved - h;
+        ASSERT_TRUE(cost.Evaluate(blocks.data(), rm.data(), nullptr));
+        blocks[b][j] = saved;
+        double scale = 1e-8, err = 0;
+        for (int i = 0; i < m; ++i) {
+          const double fd = (rp[i] - rm[i]) / (2 * h);
+          scale = std::max(scale, std::fabs(fd));
+          err = std::max(err, std::fabs(fd - J[b][i * sizes[b] + j]));
+        }
+        EXPECT_LT(err, 1e-4 * scale) << "block " << b << " column " << j;
       }
-      EXPECT_LT(err, 1e-4 * scale) << "block " << b << " column " << j;
     }
   }
 }
