@@ -54,6 +54,10 @@ DEFINE_double(ekf_process_noise, 1.0,
               "when the NIS in the report is above its band: model error)");
 DEFINE_double(ekf_window_s, 1.0,
               "identify --method=ekf: prediction window of the fit and validation errors [s]");
+DEFINE_double(ekf_gate, 1e-6,
+              "identify --method=ekf: innovation gate: a sample beyond the chi-square(1) "
+              "quantile at 1 - this probability is rejected as a glitch and counted per channel "
+              "in report.json (0: no gate)");
 DEFINE_int32(ekf_noise_adaptations, 1,
              "identify --method=ekf: re-estimate the measurement noise from the innovations "
              "and run the estimation again this many times (0: keep the first-difference "

@@ -26,4 +26,5 @@ DECLARE_string(ekf_transition);
 DECLARE_string(ekf_initial_report);
 DECLARE_double(ekf_process_noise);
 DECLARE_double(ekf_window_s);
+DECLARE_double(ekf_gate);
 DECLARE_int32(ekf_noise_adaptations);

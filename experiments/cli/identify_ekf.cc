@@ -13,6 +13,7 @@
 #include "core/errors.h"
 #include "core/plot.h"
 #include "core/report.h"
+#include "core/report_values.h"
 #include "core/stopwatch.h"
 #include "dynamics/vehicle.h"
 #include "experiments/cli/cli.h"
@@ -37,7 +38,8 @@ constexpr const char* kUsage =
     "[--validate=C.csv] [--holdout_fraction=0.2] [--smoother=true] "
     "[--ekf_scale_anchor=d|none] [--ekf_transition=linearised|sensitivities] "
     "[--ekf_covariance_pass=true] [--ekf_process_noise=1] [--ekf_window_s=1] "
-    "[--ekf_noise_adaptations=1] [--ekf_initial_report=R.json] [--prior=R.json[:name,...]]";
+    "[--ekf_noise_adaptations=1] [--ekf_gate=1e-6] [--ekf_initial_report=R.json] "
+    "[--prior=R.json[:name,...]]";
 
 std::vector<Log> ReadFlightLogs(const std::vector<std::string>& paths, const char* flag) {
   std::vector<Log> logs;
@@ -141,6 +143,11 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
                      std::to_string(FLAGS_ekf_noise_adaptations));
   }
   options.noise_adaptations = FLAGS_ekf_noise_adaptations;
+  if (!(FLAGS_ekf_gate >= 0 && FLAGS_ekf_gate < 1)) {
+    throw InputError("--ekf_gate must lie in [0, 1) (0: no innovation gate), got " +
+                     NumberText(FLAGS_ekf_gate, "%g"));
+  }
+  options.gate_probability = FLAGS_ekf_gate;
   CheckOutputFolder(run.out);
   const std::vector<std::string> paths = SplitList(run.logs);
   const std::vector<std::string> validate_paths = SplitList(run.validate);

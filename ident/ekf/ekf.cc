@@ -11,6 +11,7 @@
 #include <glog/logging.h>
 
 #include "core/errors.h"
+#include "core/report_values.h"
 #include "dynamics/outputs.h"
 #include "ident/ekf/rts_smoother.h"
 #include "ident/free_parameters.h"
@@ -82,6 +83,11 @@ std::pair<double, double> ChiSquareMeanBand(double dof, double confidence) {
   return {quantile(-z), quantile(z)};
 }
 
+double InnovationGateThreshold(double probability) {
+  const double z = NormalQuantile(0.5 * probability);  // chi2(1) = z^2, two-sided tail
+  return z * z;
+}
+
 bool EkfOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& m) {
     if (why) *why = m;
@@ -120,6 +126,10 @@ bool EkfOptions::IsValid(std::string* why) const {
     return fail("undetermined_variance_ratio must lie in (0, 1)");
   }
   if (progress_every_rows < 1) return fail("progress_every_rows must be >= 1");
+  if (!(gate_probability >= 0 && gate_probability < 1)) {
+    return fail("gate_probability must lie in [0, 1) (0: no innovation gate)");
+  }
+  if (!(gate_max_s > 0)) return fail("gate_max_s must be > 0");
   if (noise_adaptations < 0 || noise_adaptations > 5) {
     return fail("noise_adaptations must lie in 0 .. 5");
   }
@@ -158,6 +168,7 @@ struct PassResult {
   Eigen::VectorXd z;  // final augmented state
   Eigen::MatrixXd P;  // and covariance
   std::map<std::string, ChannelAccumulator> channel_stats;
+  std::map<std::string, long> rejected;  // innovation gate: samples rejected per channel
   double total_nis = 0, log_likelihood = 0;
   long total_dof = 0, clamped = 0, updates = 0;
   double propagation_s = 0, update_s = 0, smoother_s = 0;
@@ -211,6 +222,14 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
   auto unit_row = [&](int channel) { return channel < kNumStates && states_are_logged; };
   Eigen::LLT<Eigen::MatrixXd> llt;
   std::vector<int> present;  // columns of the log measured in this row
+  // Innovation gate: a sample whose normalised innovation nu^2 / S exceeds
+  // the chi-square(1) quantile at 1 - gate_probability is a glitch, dropped
+  // from the update and counted; a column rejected for longer than
+  // gate_max_s in a row is not glitching (the filter has lost it), and is
+  // used again (the divergence watch then judges it).
+  const bool gating = options.gate_probability > 0;
+  const double gate = gating ? InnovationGateThreshold(options.gate_probability) : 0;
+  std::vector<double> rejected_since;
   std::deque<std::pair<double, std::pair<double, int>>> window;  // (t, (nis, dof))
   double window_nis = 0;
   long window_dof = 0;
@@ -229,6 +248,7 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
     const int N = log.NumRows();
     const int m_all = log.NumChannels();
     EkfLogHistory& h = (*histories)[L];
+    rejected_since.assign(m_all, kNaN);
     Eigen::VectorXd R(m_all);
     for (int c = 0; c < m_all; ++c) {
       const double s = pb.noise.std.at(log.channel_names[c]);
@@ -339,23 +359,49 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
           need_model = need_model || !unit_row(log.channels[c]);
         }
       }
-      const int m = static_cast<int>(present.size());
-      if (m > 0) {
+      auto innovation_of = [&](int c) {
+        const int channel = log.channels[c];
+        const double innovation = log.values(k, c) - y_hat[channel];
+        return IsAngleChannel(channel) ? WrapAngle(innovation) : innovation;
+      };
+      if (!present.empty()) {
         const State x_pred = z.head<kNumStates>();
         if (!FlightOutputsAndJacobian(pb.vehicle.model, propagator.theta(), free.indices(),
                                       scales, x_pred, log.inputs.input(k), &y_hat,
                                       need_model ? &H_model : nullptr)) {
           return fail(t1, log, k, "output model not finite (state or parameters blown up)");
         }
+      }
+      if (gating) {  // the gate on each sample's own S_jj = (H P H^T)_jj + R_jj
+        size_t kept = 0;
+        for (const int c : present) {
+          const int channel = log.channels[c];
+          const double hph = unit_row(channel)
+                                 ? P(channel, channel)
+                                 : H_model.row(channel) * P * H_model.row(channel).transpose();
+          const double innovation = innovation_of(c);
+          const bool lost = std::isfinite(rejected_since[c]) &&
+                            t1 - rejected_since[c] > options.gate_max_s;
+          const bool outside = innovation * innovation / (hph + R[c]) > gate;
+          if (outside && !lost) {
+            if (!std::isfinite(rejected_since[c])) rejected_since[c] = t1;
+            if (rec.innovations) ++out.rejected[log.channel_names[c]];
+            continue;
+          }
+          if (!outside) rejected_since[c] = kNaN;
+          present[kept++] = c;
+        }
+        present.resize(kept);
+      }
+      const int m = static_cast<int>(present.size());
+      if (m > 0) {
         H.setZero(m, n);
         nu.resize(m);
         r_diag.resize(m);
         for (int j = 0; j < m; ++j) {
           const int c = present[j];
           const int channel = log.channels[c];
-          double innovation = log.values(k, c) - y_hat[channel];
-          if (IsAngleChannel(channel)) innovation = WrapAngle(innovation);
-          nu[j] = innovation;
+          nu[j] = innovation_of(c);
           r_diag[j] = R[c];
           if (unit_row(channel)) {
             H(j, channel) = 1.0;
@@ -695,6 +741,18 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
     result.notes.push_back("The estimation pass projected parameters back onto their bounds " +
                            std::to_string(result.clamped) +
                            " times: check the final values against the config's bounds.");
+  }
+  result.rejected = pass1.rejected;
+  if (!result.rejected.empty()) {
+    std::string list;
+    long all = 0;
+    for (const auto& [channel, count] : result.rejected) {
+      list += (list.empty() ? "" : ", ") + channel + " " + std::to_string(count);
+      all += count;
+    }
+    result.notes.push_back("The innovation gate (a sample beyond the chi-square(1) quantile at "
+                           "1 - " + NumberText(options.gate_probability, "%g") + ") rejected " +
+                           std::to_string(all) + " samples as glitches: " + list + ".");
   }
   result.log_likelihood = pass1.log_likelihood;
   result.rows = rows_per_pass;

@@ -218,6 +218,18 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
   ekf["undetermined_directions"] = undetermined;
   ekf["undetermined_threshold"] = options.undetermined_variance_ratio;
   ekf["clamped_to_bounds"] = r.clamped;
+  json rejected = json::object();
+  for (const auto& [channel, count] : r.rejected) rejected[channel] = count;
+  ekf["innovation_gate"] = {
+      {"probability", options.gate_probability},
+      {"threshold_nis", options.gate_probability > 0
+                            ? json(Number(InnovationGateThreshold(options.gate_probability)))
+                            : json(nullptr)},
+      {"max_s", options.gate_max_s},
+      {"definition", "a sample whose nu^2 / S of its own channel exceeds the chi-square(1) "
+                     "quantile at 1 - probability is rejected as a glitch (estimation pass); "
+                     "a channel rejected for longer than max_s without a break is used again"},
+      {"rejected_samples", rejected}};
   ekf["effort"] = {
       {"rows_per_pass", r.rows},
       {"updates", r.updates},
