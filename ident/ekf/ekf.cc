@@ -225,8 +225,8 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
   // Innovation gate: a sample whose normalised innovation nu^2 / S exceeds
   // the chi-square(1) quantile at 1 - gate_probability is a glitch, dropped
   // from the update and counted; a column rejected for longer than
-  // gate_max_s in a row is not glitching (the filter has lost it), and is
-  // used again (the divergence watch then judges it).
+  // gate_max_s without a break is not glitching (a sensor fault, or a filter
+  // that has lost the channel): the pass fails, naming it.
   const bool gating = options.gate_probability > 0;
   const double gate = gating ? InnovationGateThreshold(options.gate_probability) : 0;
   std::vector<double> rejected_since;
@@ -380,15 +380,24 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
                                  ? P(channel, channel)
                                  : H_model.row(channel) * P * H_model.row(channel).transpose();
           const double innovation = innovation_of(c);
-          const bool lost = std::isfinite(rejected_since[c]) &&
-                            t1 - rejected_since[c] > options.gate_max_s;
-          const bool outside = innovation * innovation / (hph + R[c]) > gate;
-          if (outside && !lost) {
+          const double nis = innovation * innovation / (hph + R[c]);
+          if (nis > gate) {
             if (!std::isfinite(rejected_since[c])) rejected_since[c] = t1;
+            if (t1 - rejected_since[c] > options.gate_max_s) {
+              char buffer[400];
+              std::snprintf(buffer, sizeof buffer,
+                            "channel %s: every sample since t = %.3f s rejected by the innovation "
+                            "gate (now nu^2 / S = %.3g, gate %.3g): a fault or step in this "
+                            "sensor, or a filter that has lost it; check the channel (or drop "
+                            "it), raise the process noise if the model cannot follow it, or turn "
+                            "the gate off (gate probability 0) to see the filter diverge",
+                            log.channel_names[c].c_str(), rejected_since[c], nis, gate);
+              return fail(t1, log, k, buffer);
+            }
             if (rec.innovations) ++out.rejected[log.channel_names[c]];
             continue;
           }
-          if (!outside) rejected_since[c] = kNaN;
+          rejected_since[c] = kNaN;
           present[kept++] = c;
         }
         present.resize(kept);

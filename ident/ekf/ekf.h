@@ -161,7 +161,8 @@ struct EkfOptions {
   // per channel (EkfResult::rejected). 1e-6 (4.9 std): on a 60 s 200 Hz log
   // of 15 channels about 0.2 good samples are rejected; 0 turns the gate off.
   // A channel rejected for longer than gate_max_s without a break is not
-  // glitching: its samples are used again (the divergence watch judges them).
+  // glitching (a sensor fault or step, or a filter that has lost it): the
+  // filter fails with the channel, the time and what to change.
   double gate_probability = 1e-6;
   double gate_max_s = 0.25;
 

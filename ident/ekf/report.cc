@@ -228,7 +228,8 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
       {"max_s", options.gate_max_s},
       {"definition", "a sample whose nu^2 / S of its own channel exceeds the chi-square(1) "
                      "quantile at 1 - probability is rejected as a glitch (estimation pass); "
-                     "a channel rejected for longer than max_s without a break is used again"},
+                     "a channel rejected for longer than max_s without a break stops the "
+                     "filter with an error naming it"},
       {"rejected_samples", rejected}};
   ekf["effort"] = {
       {"rows_per_pass", r.rows},

@@ -151,7 +151,9 @@ TEST_F(EkfCliTest, BadInputExitsTwoAndWritesNothing) {
 }
 
 TEST_F(EkfCliTest, DivergenceExitsOneAndWritesNothing) {
-  // A roll sensor fault (+0.5 rad from t = 6 s): the filter diverges.
+  // A roll sensor fault (+0.5 rad from t = 6 s): the innovation gate rejects
+  // every phi sample from then on, and after 0.25 s the filter stops with the
+  // channel and the time; with the gate off, the filter diverges.
   Log log = ReadLog(SimulateFlight("flight.csv"));
   std::vector<double> phi = log.Column("phi");
   for (int k = 0; k < log.NumRows(); ++k) {
@@ -160,7 +162,12 @@ TEST_F(EkfCliTest, DivergenceExitsOneAndWritesNothing) {
   log.SetColumn("phi", phi);
   WriteLog(Path("fault.csv"), log);
   const std::string out = Path("out");
-  const RunResult r = RunCoaxid(Identify(Path("fault.csv"), out, "--holdout_fraction=0"));
+  RunResult r = RunCoaxid(Identify(Path("fault.csv"), out, "--holdout_fraction=0"));
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_TRUE(Contains(r.output, "channel phi: every sample since t = 6.000 s rejected"))
+      << r.output;
+  EXPECT_FALSE(fs::exists(out + "/report.json"));
+  r = RunCoaxid(Identify(Path("fault.csv"), out, "--holdout_fraction=0 --ekf_gate=0"));
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_TRUE(Contains(r.output, "diverged")) << r.output;
   EXPECT_FALSE(fs::exists(out + "/report.json"));

@@ -695,8 +695,10 @@ TEST(EkfTest, NoiseAdaptationRecoversTheSensorNoise) {
 
 TEST(EkfTest, DivergenceIsReportedWithTheTime) {
   // From t = 10 s the roll measurement is off by 0.5 rad (a sensor fault):
-  // no state or parameter explains it, the innovations explode and the filter
-  // says where, instead of returning numbers.
+  // no state or parameter explains it. The innovation gate rejects every phi
+  // sample from 10 s and stops the filter after gate_max_s, naming phi and
+  // the time; with the gate off the innovations explode and the divergence
+  // watch says where. Either way: no numbers.
   const SimulatedFlight f = Simulate(20, 14);
   Log log = f.log;
   std::vector<double> phi = log.Column("phi");
@@ -706,8 +708,15 @@ TEST(EkfTest, DivergenceIsReportedWithTheTime) {
   log.SetColumn("phi", phi);
   EkfOptions options;
   options.smoother = false;
-  const EkfResult r =
-      RunEkf(WithTrueD(f), {MakeEstimationLog(log)}, TruthNoise(f.scenario), options);
+  EkfResult r = RunEkf(WithTrueD(f), {MakeEstimationLog(log)}, TruthNoise(f.scenario), options);
+  EXPECT_FALSE(r.usable);
+  EXPECT_NE(r.failure.find("channel phi: every sample since t = 10.000 s rejected"),
+            std::string::npos)
+      << r.failure;
+  EXPECT_GE(r.failure_time, 10.0 + options.gate_max_s);
+  EXPECT_LT(r.failure_time, 10.0 + options.gate_max_s + 0.01);
+  options.gate_probability = 0;
+  r = RunEkf(WithTrueD(f), {MakeEstimationLog(log)}, TruthNoise(f.scenario), options);
   EXPECT_FALSE(r.usable);
   EXPECT_NE(r.failure.find("diverged"), std::string::npos) << r.failure;
   EXPECT_NE(r.failure.find("t = 1"), std::string::npos) << r.failure;
