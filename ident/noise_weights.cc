@@ -51,20 +51,25 @@ NoiseWeights NoiseFromData(const std::vector<EstimationLog>& logs) {
         }
       }
       mean = n > 0 ? mean / n : 0;
+      int previous = -1;  // the channel's previous sample (flight: any earlier row)
       for (int k = 0; k < column.size(); ++k) {
+        if (!std::isfinite(column[k])) continue;
         if (steady) {
-          if (std::isfinite(column[k])) {
-            a.sum_squares += (column[k] - mean) * (column[k] - mean);
-            ++a.count;
-          }
-        } else if (k > 0 && std::isfinite(column[k]) && std::isfinite(column[k - 1]) &&
-                   (log.kind == LogKind::kFlight ||
-                    log.inputs.input(k) == log.inputs.input(k - 1))) {
-          // Balance: differences only within a hold (constant loads).
-          const double d = column[k] - column[k - 1];
+          a.sum_squares += (column[k] - mean) * (column[k] - mean);
+          ++a.count;
+        } else if (previous >= 0 &&
+                   (log.kind == LogKind::kFlight
+                        ? true
+                        : previous == k - 1 && log.inputs.input(k) == log.inputs.input(k - 1))) {
+          // Flight: between the channel's consecutive samples, whatever its
+          // rate (a 20 Hz position in a 200 Hz log: the motion over 50 ms
+          // adds to the estimate, which the re-estimates refine). Balance:
+          // adjacent rows within a hold only (constant loads).
+          const double d = column[k] - column[previous];
           a.sum_squares += 0.5 * d * d;
           ++a.count;
         }
+        previous = k;
       }
     }
   }

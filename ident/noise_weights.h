@@ -19,7 +19,9 @@ struct NoiseWeights {
 
 // A first estimate from the data alone: white noise on a smooth signal
 // sampled fast shows in first differences, std(diff) / sqrt(2) per channel,
-// pooled over logs. Where rows are separate steady points (no smooth signal),
+// pooled over logs (in a flight log, differences between a channel's
+// consecutive samples, so a channel logged at a lower rate, empty elsewhere,
+// is estimated too). Where rows are separate steady points (no smooth signal),
 // the spread of the channel is used instead (an upper bound that the
 // residual-based re-estimate then refines). Floored at 1e-9 of the channel's
 // magnitude so no weight is infinite.

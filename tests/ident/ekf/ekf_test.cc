@@ -531,6 +531,47 @@ TEST(EkfTest, GlitchRowsAreRejectedAndCounted) {
   EXPECT_TRUE(!ungated.usable || off > 0) << "the glitches do not matter without the gate";
 }
 
+// Mixed rates (issue 14): the 60 s flight as a real logger writes it, gyros,
+// accelerometers and attitude at 200 Hz, positions at 20 Hz (empty fields in
+// the other rows), no velocities, with the noise estimated from the data as
+// the CLI does (NoiseFromData, one adaptation pass): every parameter's
+// estimate within 1 std (the full-rate fit's) of the full-rate estimate.
+TEST(EkfTest, MultiRateLogAgreesWithFullRate) {
+  const SimulatedFlight& f = Flight();
+  Log thinned;
+  thinned.kind = f.log.kind;
+  thinned.source = "mixed rates";
+  for (const std::string& c : f.log.columns) {
+    if (c == "u" || c == "v" || c == "w") continue;
+    thinned.columns.push_back(c);
+    std::vector<double> values = f.log.Column(c);
+    if (c == "x" || c == "y" || c == "z") {
+      for (size_t k = 0; k < values.size(); ++k) {
+        if (k % 10 != 0) values[k] = std::numeric_limits<double>::quiet_NaN();
+      }
+    }
+    thinned.values.push_back(values);
+  }
+  const EstimationLog full = MakeEstimationLog(f.log), thin = MakeEstimationLog(thinned);
+  ASSERT_EQ(thin.NumChannels(), full.NumChannels() - 3);
+  EkfOptions options;
+  options.smoother = false;
+  options.noise_adaptations = 1;
+  const EkfResult a = RunEkf(WithTrueD(f), {full}, NoiseFromData({full}), options);
+  const EkfResult b = RunEkf(WithTrueD(f), {thin}, NoiseFromData({thin}), options);
+  ASSERT_TRUE(a.usable) << a.failure;
+  ASSERT_TRUE(b.usable) << b.failure;
+  ASSERT_EQ(a.free_names, b.free_names);
+  for (size_t k = 0; k < a.free_names.size(); ++k) {
+    if (!a.identifiable[k]) continue;
+    EXPECT_LE(std::fabs(b.estimate[k] - a.estimate[k]), a.estimate_std[k])
+        << a.free_names[k] << ": full rate " << a.estimate[k] << " +- " << a.estimate_std[k]
+        << ", mixed " << b.estimate[k] << " +- " << b.estimate_std[k];
+    // The thinned log holds less information, never more.
+    EXPECT_GE(b.estimate_std[k], 0.99 * a.estimate_std[k]) << a.free_names[k];
+  }
+}
+
 TEST(EkfTest, MissingChannelsAndIrregularRows) {
   // A 30 s log made irregular without changing its truth: extra rows inserted
   // inside hold intervals (same inputs, so the same zero-order hold) at random
