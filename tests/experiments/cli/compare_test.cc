@@ -15,8 +15,10 @@
 #include <string>
 
 #include "core/atomic_file.h"
+#include "core/log.h"
 #include "experiments/reports/demo_report.h"
 #include "tests/cli_test_dir.h"
+#include "tests/mixed_rate_log.h"
 #include "tests/run_coaxid.h"
 
 namespace coaxid {
@@ -207,6 +209,25 @@ TEST_F(CompareCliTest, TableHasAllThreeMethodsConsistentFiguresAndTheCzSplit) {
   if (c["plots"].size() > 0) {  // gnuplot present: the estimates and each method's plots
     EXPECT_GE(images, 4);
   }
+}
+
+// Mixed rates end to end (issue 14): the flight as a real logger writes it
+// (positions at 20 Hz with empty fields between, no velocities:
+// tests/mixed_rate_log.h) goes through compare (all three methods) and
+// discover.
+TEST_F(CompareCliTest, MixedRateFlightGoesThroughCompareAndDiscover) {
+  const std::string mixed = Path("mixed.csv");
+  WriteLog(mixed, MixedRateLog(ReadLog(Flight())));
+  const std::string logs = Balance() + "," + mixed;
+  const std::string out = Path("out");
+  RunResult r = RunCoaxid(Compare(logs, out));
+  ASSERT_EQ(r.status, 0) << r.output;
+  const json c = json::parse(ReadFile(out + "/compare.json"));
+  ASSERT_EQ(c["methods"].size(), 3u);
+  for (const json& m : c["methods"]) EXPECT_EQ(m["status"], "ran") << m.dump();
+  r = RunCoaxid("discover --logs=" + logs + " --config=" + config_ + " --out=" + Path("disc"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(Path("disc") + "/discovery.json"));
 }
 
 TEST_F(CompareCliTest, SkipsAMethodWithoutItsKindOfLog) {

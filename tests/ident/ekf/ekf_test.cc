@@ -31,6 +31,7 @@
 #include "dynamics/trim.h"
 #include "experiments/simulation/scenario.h"
 #include "experiments/simulation/simulate_experiment.h"
+#include "tests/mixed_rate_log.h"
 
 namespace coaxid {
 namespace {
@@ -538,21 +539,7 @@ TEST(EkfTest, GlitchRowsAreRejectedAndCounted) {
 // estimate within 1 std (the full-rate fit's) of the full-rate estimate.
 TEST(EkfTest, MultiRateLogAgreesWithFullRate) {
   const SimulatedFlight& f = Flight();
-  Log thinned;
-  thinned.kind = f.log.kind;
-  thinned.source = "mixed rates";
-  for (const std::string& c : f.log.columns) {
-    if (c == "u" || c == "v" || c == "w") continue;
-    thinned.columns.push_back(c);
-    std::vector<double> values = f.log.Column(c);
-    if (c == "x" || c == "y" || c == "z") {
-      for (size_t k = 0; k < values.size(); ++k) {
-        if (k % 10 != 0) values[k] = std::numeric_limits<double>::quiet_NaN();
-      }
-    }
-    thinned.values.push_back(values);
-  }
-  const EstimationLog full = MakeEstimationLog(f.log), thin = MakeEstimationLog(thinned);
+  const EstimationLog full = MakeEstimationLog(f.log), thin = MakeEstimationLog(MixedRateLog(f.log));
   ASSERT_EQ(thin.NumChannels(), full.NumChannels() - 3);
   EkfOptions options;
   options.smoother = false;

@@ -12,6 +12,7 @@
 #include "experiments/simulation/simulate_experiment.h"
 #include "ident/free_parameters.h"
 #include "ident/output_error/costs.h"
+#include "tests/mixed_rate_log.h"
 
 namespace coaxid {
 namespace {
@@ -107,6 +108,34 @@ TEST(OutputError, NoisyFlightAndBalanceEstimatesWithinThreeStd) {
     const auto& names = r.identifiability.names;
     const int k = std::find(names.begin(), names.end(), name) - names.begin();
     EXPECT_TRUE(r.identifiability.identifiable[k]) << name;
+  }
+}
+
+// Mixed rates (issue 14): the same flight and balance logs, the flight as a
+// real logger writes it (positions at 20 Hz, no velocities:
+// tests/mixed_rate_log.h), the noise estimated from the data: every
+// identifiable parameter within 1 std (the full-rate fit's) of the full-rate
+// estimate, and no std smaller than the full-rate one.
+TEST(OutputError, MixedRateFlightAgreesWithFullRate) {
+  const Vehicle nominal = Nominal();
+  const Vehicle truth = MakeTruthVehicle(nominal.config, TruthScenario());
+  const Log flight = FlightLog(truth, 6.0, 21, true);
+  const EstimationLog balance = MakeEstimationLog(BalanceLog(truth, 22, true));
+  const OutputErrorResult full =
+      FitOutputError(nominal, {MakeEstimationLog(flight), balance}, FastOptions());
+  const OutputErrorResult mixed =
+      FitOutputError(nominal, {MakeEstimationLog(MixedRateLog(flight)), balance}, FastOptions());
+  ASSERT_TRUE(full.usable) << full.why_not_usable;
+  ASSERT_TRUE(mixed.usable) << mixed.why_not_usable;
+  const IdentifiabilityReport& a = full.identifiability;
+  const IdentifiabilityReport& b = mixed.identifiability;
+  ASSERT_EQ(a.names, b.names);
+  for (size_t k = 0; k < a.names.size(); ++k) {
+    if (!a.identifiable[k]) continue;
+    const double x = full.parameters.Value(a.names[k]), y = mixed.parameters.Value(a.names[k]);
+    EXPECT_LE(std::fabs(y - x), a.std[k]) << a.names[k] << ": full rate " << x << " +- "
+                                          << a.std[k] << ", mixed " << y << " +- " << b.std[k];
+    EXPECT_GE(b.std[k], 0.99 * a.std[k]) << a.names[k];
   }
 }
 
