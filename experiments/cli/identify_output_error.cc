@@ -23,6 +23,7 @@
 #include "ident/baseline/linear_baseline.h"
 #include "ident/ekf/ekf_start.h"
 #include "ident/output_error/output_error.h"
+#include "ident/residual_outliers.h"
 
 DEFINE_double(segment_s, 1.0,
               "output_error: multiple-shooting segment length and prediction window [s]");
@@ -191,6 +192,13 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
                                        split.validation, result.noise, FLAGS_segment_s, options);
 
   if (!result.gauge.note.empty()) notes.push_back(result.gauge.note);
+  const std::map<std::string, ChannelOutliers> outliers =
+      ResidualOutliers(split.estimation, result.predictions, result.noise);
+  const std::string outliers_text = OutliersText(outliers);
+  if (!outliers_text.empty()) {
+    notes.push_back("Fit " + outliers_text + ".");
+    std::fprintf(stderr, "identify: %s\n", outliers_text.c_str());
+  }
 
   std::fprintf(stderr, "identify: validated (elapsed %.1f s); writing plots ...\n",
                SecondsSince(start));
@@ -240,6 +248,7 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
       {"scale", result.gauge.ToJson()},
       {"ratios", RatiosJson(result.ratios)},
       {"fit", FitJson(ChannelFitErrors(split.estimation, result.predictions))},
+      {"residual_outliers", OutliersJson(outliers)},
       {"validation", split.validation.empty()
                          ? nlohmann::json{{"description", split.description},
                                           {"overall_nrmse", nullptr}}
