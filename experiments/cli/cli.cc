@@ -22,6 +22,8 @@ const char* const kCliUsage =
     "           [--validate=C.csv,...] [--holdout_fraction=0.2]\n"
     "           linear_kf: [--process_noise=0]\n"
     "           output_error: [--segment_s=1] [--start=config|linear_kf] [--huber=0] [--coloured_residuals]\n"
+    "  identify --method=kinematic --logs=A.csv[,B.csv...] --out=DIR [--config=F]\n"
+    "           (sensor biases, scale factors, time offset; writes corrected logs)\n"
     "  discover --logs=A.csv[,B.csv...] --config=F --out=DIR [--validate=C.csv,...]\n"
     "           [--alpha=0.01] [--max_added=4] [--segment_s=1]\n"
     "  compare  --logs=A.csv[,B.csv...] --config=F --out=DIR [--validate=C.csv,...]\n"

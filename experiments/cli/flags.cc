@@ -62,3 +62,11 @@ DEFINE_int32(ekf_noise_adaptations, 1,
              "identify --method=ekf: re-estimate the measurement noise from the innovations "
              "and run the estimation again this many times (0: keep the first-difference "
              "estimate)");
+DEFINE_bool(kinematic_scale_factors, true,
+            "identify --method=kinematic: estimate the gyro and accelerometer scale factors "
+            "(those the logs do not fix are held at 0 anyway)");
+DEFINE_bool(kinematic_time_offset, true,
+            "identify --method=kinematic: estimate the time offset of the positions, velocities "
+            "and attitude behind the IMU");
+DEFINE_double(kinematic_segment_s, 0.5,
+              "identify --method=kinematic: multiple-shooting segment length [s]");

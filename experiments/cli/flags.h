@@ -28,3 +28,7 @@ DECLARE_double(ekf_process_noise);
 DECLARE_double(ekf_window_s);
 DECLARE_double(ekf_gate);
 DECLARE_int32(ekf_noise_adaptations);
+// identify --method=kinematic (experiments/cli/identify_kinematic.h).
+DECLARE_bool(kinematic_scale_factors);
+DECLARE_bool(kinematic_time_offset);
+DECLARE_double(kinematic_segment_s);

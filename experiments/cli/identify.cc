@@ -21,6 +21,7 @@
 #include "experiments/cli/flag_checks.h"
 #include "experiments/cli/flags.h"
 #include "experiments/cli/identify_ekf.h"
+#include "experiments/cli/identify_kinematic.h"
 #include "experiments/cli/identify_output_error.h"
 #include "ident/baseline/linear_baseline.h"
 #include "ident/baseline/plots.h"
@@ -36,9 +37,12 @@ constexpr const char* kLinearKfUsage =
     "[--validate=C.csv] [--holdout_fraction=0.2] [--process_noise=0]";
 
 void CheckMethod(const std::string& method) {
-  if (method == "linear_kf" || method == "output_error" || method == "ekf") return;
+  if (method == "linear_kf" || method == "output_error" || method == "ekf" ||
+      method == "kinematic") {
+    return;
+  }
   throw InputError("unknown method '" + method +
-                   "' (the methods are linear_kf, ekf and output_error)");
+                   "' (the methods are linear_kf, ekf, output_error and kinematic)");
 }
 
 // Reads logs; linear_kf takes balance logs only.
@@ -137,6 +141,7 @@ nlohmann::json Identify(const IdentifyRun& run) {
   CheckMethod(run.method);
   if (run.method == "output_error") return IdentifyOutputError(run);
   if (run.method == "ekf") return IdentifyEkf(run);
+  if (run.method == "kinematic") return IdentifyKinematic(run);
   if (!run.prior.empty()) {
     throw InputError("--prior is for output_error and ekf; linear_kf takes d from the config "
                      "(model.md decision 6)");
