@@ -11,6 +11,7 @@
 #include "core/statistics.h"
 #include "dynamics/trim.h"
 #include "experiments/simulation/simulate_experiment.h"
+#include "tests/typical_effect.h"
 
 namespace coaxid {
 namespace {
@@ -87,14 +88,9 @@ TEST(FlightSimulation, MeasurementEffectsAreWhatTheSensorsLog) {
   scenario.flight.duration_s = 1;
   scenario.flight.excitation.type = Excitation::Type::kNone;
   scenario.flight.noise_std.clear();
-  std::map<std::string, ParameterOverride> gyro, accel;
-  gyro["b_p"].value = 0.02;
-  gyro["b_q"].value = -0.015;
-  gyro["b_r"].value = 0.01;
-  accel["b_ax"].value = 0.15;
-  accel["b_ay"].value = -0.1;
-  accel["b_az"].value = 0.2;
-  scenario.truth_effects = {{"gyro_bias", gyro}, {"accel_bias", accel}};
+  // The library's typical biases: b_p 0.02, b_q -0.015, b_r 0.01 rad/s; b_ax 0.15,
+  // b_ay -0.1, b_az 0.2 m/s^2.
+  scenario.truth_effects = {TypicalEffect("gyro_bias"), TypicalEffect("accel_bias")};
   const Vehicle truth = MakeTruthVehicle(vehicle.config, scenario);
   const Log log = SimulateFlight(truth, scenario.flight, 1);
   EXPECT_NEAR(log.Column("p")[0], 0.02, 1e-12);

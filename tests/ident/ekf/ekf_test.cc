@@ -32,6 +32,7 @@
 #include "experiments/simulation/scenario.h"
 #include "experiments/simulation/simulate_experiment.h"
 #include "tests/mixed_rate_log.h"
+#include "tests/typical_effect.h"
 
 namespace coaxid {
 namespace {
@@ -446,14 +447,8 @@ TEST(EkfTest, OutputJacobianMatchesCentralDifferences) {
 TEST(EkfTest, EstimatesSensorBiasesWithinThreeStd) {
   const VehicleConfig config = LoadVehicleConfig(Source("configs/glmav.yaml"));
   Scenario scenario = LoadScenario(Source("configs/scenarios/flight.yaml"));
-  std::map<std::string, ParameterOverride> gyro, accel, absent;
-  gyro["b_p"].value = 0.02;
-  gyro["b_q"].value = -0.015;
-  gyro["b_r"].value = 0.01;
-  accel["b_ax"].value = 0.15;
-  accel["b_ay"].value = -0.1;
-  accel["b_az"].value = 0.2;
-  scenario.truth_effects = {{"gyro_bias", gyro}, {"accel_bias", accel}};
+  std::map<std::string, ParameterOverride> absent;
+  scenario.truth_effects = {TypicalEffect("gyro_bias"), TypicalEffect("accel_bias")};
   scenario.flight.duration_s = 30;
   const Vehicle truth = MakeTruthVehicle(config, scenario);
   const Log log = SimulateFlight(truth, scenario.flight, 12);
