@@ -8,28 +8,27 @@
 namespace coaxid {
 
 bool DerivativeJacobians(const VehicleModel& model, const Eigen::VectorXd& theta,
-                         const double* x, const InputVector& input,
+                         const double* x, const HeldInput& input, double t,
                          const std::vector<int>& parameter_indices, Eigen::MatrixXd* dfdx,
                          Eigen::MatrixXd* dfdp) {
   CHECK(dfdx != nullptr);
   return AutodiffJacobian(
       [&](const auto* th, const auto* xx, auto* xdot) {
         using T = std::remove_cv_t<std::remove_pointer_t<decltype(th)>>;
-        const T u[kNumInputs] = {T(input[0]), T(input[1]), T(input[2]), T(input[3])};
+        T u[kNumInputs];
+        model.AppliedInput(th, input, t, u);
         model.Derivative(th, xx, u, xdot);
       },
       theta, x, kNumStates, kNumStates, parameter_indices, nullptr, dfdx, dfdp);
 }
 
 bool FlightOutputJacobians(const VehicleModel& model, const Eigen::VectorXd& theta,
-                           const double* x, const InputVector& input,
+                           const double* x, const HeldInput& input,
                            const std::vector<int>& parameter_indices, double* y,
                            Eigen::MatrixXd* dydx, Eigen::MatrixXd* dydp) {
   return AutodiffJacobian(
       [&](const auto* th, const auto* xx, auto* out) {
-        using T = std::remove_cv_t<std::remove_pointer_t<decltype(th)>>;
-        const T u[kNumInputs] = {T(input[0]), T(input[1]), T(input[2]), T(input[3])};
-        FlightOutputs(model, th, xx, u, out);
+        FlightOutputsAt(model, th, xx, input, out);
       },
       theta, x, kNumStates, kNumFlightChannels, parameter_indices, y, dydx, dydp);
 }

@@ -12,18 +12,20 @@
 
 namespace coaxid {
 
-// f = xdot(theta, x, input). dfdx: 12 x 12. dfdp (optional): 12 x P with
-// column k = df/dtheta[parameter_indices[k]]. Returns false if any entry is
-// not finite.
+// f = xdot(theta, x, input applied at time t of the interval `input`). dfdx:
+// 12 x 12. dfdp (optional): 12 x P with column k = df/dtheta[parameter_indices[k]]
+// (through the applied input too: a lag's time constant). Returns false if any
+// entry is not finite.
 bool DerivativeJacobians(const VehicleModel& model, const Eigen::VectorXd& theta,
-                         const double* x, const InputVector& input,
+                         const double* x, const HeldInput& input, double t,
                          const std::vector<int>& parameter_indices, Eigen::MatrixXd* dfdx,
                          Eigen::MatrixXd* dfdp);
 
-// The 15 flight outputs (outputs.h) y and their Jacobians w.r.t. the state
-// (15 x 12) and theta[parameter_indices] (15 x P); any output pointer may be null.
+// The 15 flight outputs (outputs.h) y at the start of the interval `input`
+// (its row's time) and their Jacobians w.r.t. the state (15 x 12) and
+// theta[parameter_indices] (15 x P); any output pointer may be null.
 bool FlightOutputJacobians(const VehicleModel& model, const Eigen::VectorXd& theta,
-                           const double* x, const InputVector& input,
+                           const double* x, const HeldInput& input,
                            const std::vector<int>& parameter_indices, double* y,
                            Eigen::MatrixXd* dydx, Eigen::MatrixXd* dydp);
 

@@ -35,6 +35,16 @@ void FlightOutputs(const VehicleModel& model, const T* theta, const T* x, const 
   model.AddToFlightMeasurements(theta, y);
 }
 
+// FlightOutputs at the start of the hold interval `held` (its row's time),
+// with the inputs the vehicle applied then.
+template <typename T>
+void FlightOutputsAt(const VehicleModel& model, const T* theta, const T* x, const HeldInput& held,
+                     T* y) {
+  T u[kNumInputs];
+  model.AppliedInput(theta, held, held.t0, u);
+  FlightOutputs(model, theta, x, u, y);
+}
+
 // All 10 balance outputs with inputs u (eqs. 57-63 with model.md's decisions).
 template <typename T>
 void BalanceOutputs(const VehicleModel& model, const T* theta, const T* u, T* y) {

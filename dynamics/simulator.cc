@@ -34,6 +34,9 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
   const int samples = last - first + 1;
   out->times.resize(samples);
   out->states.resize(samples);
+  out->inputs.resize(samples);
+  const InputVector lag = ode_.model().InputLags(ode_.theta().data());
+  out->inputs[0] = HeldInputAt(inputs, first, lag);
   out->times[0] = inputs.time(first);
   out->states[0] = x0;
   const bool with_sensitivities = columns_ > 0;
@@ -49,7 +52,8 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
   Eigen::VectorXd x = x0;
   Eigen::VectorXd z(variational_ ? variational_->NumStates() : 0);
   for (int k = first; k < last; ++k) {
-    ode_.SetInput(inputs.input(k));
+    const HeldInput& held = out->inputs[k - first];
+    ode_.SetInput(held);
     // Restart at every input change: the right-hand side jumps there.
     bool ok;
     if (variational_) {
@@ -74,6 +78,7 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
       return false;
     }
     const int i = k + 1 - first;
+    out->inputs[i] = NextHeldInput(held, lag, inputs.input(k + 1), inputs.time(k + 1));
     if (with_sensitivities) out->sensitivities[i] = S;
     out->times[i] = inputs.time(k + 1);
     out->states[i] = x;

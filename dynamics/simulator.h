@@ -23,6 +23,7 @@ struct Trajectory {
   std::vector<double> times;                     // the hold's sample times first..last
   std::vector<Eigen::VectorXd> states;           // x(t_k), 12 each
   std::vector<Eigen::MatrixXd> sensitivities;    // dx(t_k)/d[x0 | params], if asked
+  std::vector<HeldInput> inputs;                 // each sample's interval as applied
 };
 
 // How sensitivities are computed: CVODES's forward sensitivity module, or
@@ -43,7 +44,8 @@ class Simulator {
   void SetTheta(const Eigen::VectorXd& theta) { ode_.SetTheta(theta); }
 
   // Integrates from x0 at inputs.time(first) to inputs.time(last), one hold
-  // interval at a time, and records the state (and sensitivities) at every
+  // interval at a time (a lagged input starts where the log's rows before
+  // `first` left it, dynamics/held_input.h), and records the state (and sensitivities) at every
   // sample first..last. Returns false with last_error() if CVODE fails or the
   // state stops being finite (blown-up parameters): never throws or aborts.
   // *out is then unspecified. Reusing one Trajectory for many runs of the

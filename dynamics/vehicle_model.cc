@@ -11,9 +11,16 @@ VehicleModel::VehicleModel(InterferenceModel interference,
   CHECK(interference_ != InterferenceModel::kTable || (table_ && !table_->empty()))
       << "a tabulated interference model needs a table";
   for (int offset : effect_offset_) any_effect_ = any_effect_ || offset >= 0;
+  lag_index_.fill(-1);
   ForEachEffectType([&](auto effect, int i) {
-    if (effect_offset_[i] >= 0 && decltype(effect)::kChangesFlightMeasurements) {
-      changes_measurements_ = true;
+    using Effect = decltype(effect);
+    if (effect_offset_[i] < 0) return;
+    if (Effect::kChangesFlightMeasurements) changes_measurements_ = true;
+    for (int u = 0; u < kNumInputs; ++u) {
+      if (Effect::kInputLag[u] < 0) continue;
+      CHECK_LT(lag_index_[u], 0) << "two effects lag input " << u;
+      lag_index_[u] = effect_offset_[i] + Effect::kInputLag[u];
+      lags_inputs_ = true;
     }
   });
 }

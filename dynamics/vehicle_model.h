@@ -14,6 +14,7 @@
 #include "core/parameters.h"
 #include "core/vehicle_config.h"
 #include "dynamics/effects/effect_library.h"
+#include "dynamics/held_input.h"
 #include "dynamics/interference_loss.h"
 #include "dynamics/rigid_body.h"
 #include "dynamics/state.h"
@@ -30,7 +31,10 @@ inline constexpr double kAirspeedSmoothing = 1e-6;
 class VehicleModel {
  public:
   // The paper's model: parametric sigma, no effect.
-  VehicleModel() { effect_offset_.fill(-1); }
+  VehicleModel() {
+    effect_offset_.fill(-1);
+    lag_index_.fill(-1);
+  }
   // effect_offset[i]: index in theta of library effect i's first parameter,
   // or -1 if the effect is off. A table model needs a table.
   VehicleModel(InterferenceModel interference, std::shared_ptr<const SigmaTable> table,
@@ -43,6 +47,26 @@ class VehicleModel {
   // (EffectBase::kChangesFlightMeasurements): then the logged state channels
   // are not the states themselves.
   bool ChangesFlightMeasurements() const { return changes_measurements_; }
+  // Whether an enabled actuator effect (servo_lag) lags an input: then what
+  // the vehicle applies in flight is not the logged row (dynamics/held_input.h).
+  bool LagsInputs() const { return lags_inputs_; }
+  // The lag time constants in theta per input (0 where none) [s].
+  InputVector InputLags(const double* theta) const {
+    InputVector lag{0, 0, 0, 0};
+    for (int i = 0; i < kNumInputs; ++i) {
+      if (lag_index_[i] >= 0) lag[i] = theta[lag_index_[i]];
+    }
+    return lag;
+  }
+  // The inputs applied at time t of the interval `held` (flight; eq. (A) of
+  // dynamics/held_input.h for lagged inputs, the logged row otherwise).
+  template <typename T>
+  void AppliedInput(const T* theta, const HeldInput& held, double t, T* u) const {
+    for (int i = 0; i < kNumInputs; ++i) {
+      u[i] = lag_index_[i] >= 0 ? LaggedInput(held, i, theta[lag_index_[i]], t)
+                                : T(held.logged[i]);
+    }
+  }
 
   // Simulated truths only (dynamics/truth_only_loads.h): loads outside the
   // library, applied by the double-valued model alone.
@@ -97,7 +121,9 @@ class VehicleModel {
   InterferenceModel interference_ = InterferenceModel::kParametric;
   std::shared_ptr<const SigmaTable> table_;
   std::array<int, kNumEffects> effect_offset_;
+  std::array<int, kNumInputs> lag_index_;  // theta index of each input's lag, or -1
   bool any_effect_ = false;
+  bool lags_inputs_ = false;
   bool changes_measurements_ = false;
   std::shared_ptr<const TruthOnlyLoads> truth_only_;
 };

@@ -1,11 +1,13 @@
 // The vehicle model as an OdeSystem for the integrator: the 12-state
-// derivative (eqs. 34-49) with the input held constant between calls of
-// SetInput (zero-order hold), and its Jacobians by automatic differentiation.
+// derivative (eqs. 34-49) over one hold interval set by SetInput (the logged
+// row held, model.md; a lagged actuator's exact exponential inside it,
+// dynamics/held_input.h), and its Jacobians by automatic differentiation.
 #pragma once
 
 #include <vector>
 
 #include "core/input_hold.h"
+#include "dynamics/held_input.h"
 #include "dynamics/ode_system.h"
 #include "dynamics/vehicle_model.h"
 
@@ -18,8 +20,9 @@ class VehicleOde : public OdeSystem {
   VehicleOde(const VehicleModel& model, const Eigen::VectorXd& theta,
              std::vector<int> sensitivity_parameters = {});
 
-  void SetInput(const InputVector& input) { input_ = input; }
-  const InputVector& input() const { return input_; }
+  void SetInput(const HeldInput& input) { input_ = input; }
+  const HeldInput& input() const { return input_; }
+  const VehicleModel& model() const { return model_; }
   void SetTheta(const Eigen::VectorXd& theta) { theta_ = theta; }
   const Eigen::VectorXd& theta() const { return theta_; }
 
@@ -35,7 +38,7 @@ class VehicleOde : public OdeSystem {
   const VehicleModel& model_;
   Eigen::VectorXd theta_;
   std::vector<int> sensitivity_parameters_;
-  InputVector input_{0, 0, 0, 0};
+  HeldInput input_;
 };
 
 }  // namespace coaxid

@@ -49,7 +49,7 @@ std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs) {
         const int col = log->ChannelColumn(i);
         if (col >= 0 && std::isfinite(log->values(row, col))) sample.x[i] = log->values(row, col);
       }
-      sample.u = log->inputs.input(row);
+      sample.u = HeldInput::Steady(log->inputs.input(row), log->inputs.time(row));
       samples.push_back(sample);
     }
   }
@@ -69,7 +69,8 @@ ScaleDirection FindScaleDirection(const VehicleModel& model, const ParameterSet&
   Eigen::MatrixXd J(rows_per_sample * samples.size(), nc);
   Eigen::MatrixXd dfdx, dfdp, dydp;
   for (size_t s = 0; s < samples.size(); ++s) {
-    if (!DerivativeJacobians(model, theta, samples[s].x.data(), samples[s].u, candidates, &dfdx,
+    if (!DerivativeJacobians(model, theta, samples[s].x.data(), samples[s].u, samples[s].u.t0,
+                             candidates, &dfdx,
                              &dfdp) ||
         !FlightOutputJacobians(model, theta, samples[s].x.data(), samples[s].u, candidates,
                                nullptr, nullptr, &dydp)) {

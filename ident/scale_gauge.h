@@ -36,11 +36,12 @@ namespace coaxid {
 
 struct ModelSample {
   State x;
-  InputVector u;
+  HeldInput u;
 };
 
 // Operating points for the invariance check: up to 20 rows spread over the
-// flight logs, states as measured (0 where absent), the rows' inputs.
+// flight logs, states as measured (0 where absent), the rows' inputs (as
+// logged: a lag's history does not enter a scale).
 std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs);
 
 struct ScaleDirection {

@@ -97,7 +97,8 @@ void BM_DerivativeJacobians12Unknowns(benchmark::State& state) {
   Eigen::MatrixXd dfdx, dfdp;
   for (auto _ : state) {
     const bool ok =
-        DerivativeJacobians(v.model, theta, x.data(), kBenchInput, indices, &dfdx, &dfdp);
+        DerivativeJacobians(v.model, theta, x.data(), HeldInput::Steady(kBenchInput, 0), 0, indices,
+                            &dfdx, &dfdp);
     benchmark::DoNotOptimize(ok);
     benchmark::DoNotOptimize(dfdx.data());
     benchmark::DoNotOptimize(dfdp.data());

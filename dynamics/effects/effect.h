@@ -15,10 +15,16 @@
 //                                            dynamics/outputs.h, true values in, logged
 //                                            values out); such an effect also sets
 //                                            kChangesFlightMeasurements = true
+// and an actuator effect (servo_lag) sets kInputLag: for each input (omega1,
+// omega2, delta_cx, delta_cy) the index in p of the time constant of the
+// first-order lag through which the applied input follows the logged one, or
+// -1 (dynamics/held_input.h applies the lag, in flight).
 // where p points at the effect's own parameters (in Parameters() order).
 // Register it in effect_library.h.
 #pragma once
 
+#include <array>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,6 +39,10 @@ struct EffectParameterSpec {
   double scale;         // typical magnitude, for scaling
   double typical;       // a clearly visible but realistic strength, for simulations
   std::string unit;
+  // Where the closing loop linearises a candidate's parameter (NaN: at
+  // `value`). Needed where the model has no derivative at absence: a lag's
+  // response e^(-t/T) has none at T = 0.
+  double linearise_at = std::numeric_limits<double>::quiet_NaN();
 };
 
 enum class Setting { kBalance, kFlight };
@@ -68,6 +78,8 @@ struct EffectBase {
   // channels are then no longer the states themselves, and the estimators
   // take their outputs and Jacobians from the model for every channel.
   static constexpr bool kChangesFlightMeasurements = false;
+  // Actuator effects: per input, the index in p of its lag time constant, or -1.
+  static constexpr std::array<int, 4> kInputLag = {-1, -1, -1, -1};
   template <typename T>
   static void AdjustInputs(const T* /*p*/, T* /*delta_cx*/, T* /*delta_cy*/) {}
   template <typename T>

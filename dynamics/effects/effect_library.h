@@ -16,6 +16,7 @@
 #include "dynamics/effects/gyro_bias.h"
 #include "dynamics/effects/rotor_damping.h"
 #include "dynamics/effects/rotor_drag.h"
+#include "dynamics/effects/servo_lag.h"
 #include "dynamics/effects/swashplate_bias.h"
 #include "dynamics/effects/wake_interference.h"
 #include "dynamics/effects/wind.h"
@@ -25,7 +26,7 @@ namespace coaxid {
 using EffectTypes =
     std::tuple<GyroscopicEffect, RotorDampingEffect, GroundEffect, RotorDragEffect,
                CgOffsetEffect, SwashplateBiasEffect, WindEffect, WakeInterferenceEffect,
-               GyroBiasEffect, AccelBiasEffect>;
+               GyroBiasEffect, AccelBiasEffect, ServoLagEffect>;
 inline constexpr int kNumEffects = std::tuple_size_v<EffectTypes>;
 
 namespace internal {

@@ -161,6 +161,9 @@ Log SimulateFlight(const Vehicle& truth, const FlightScenario& s, uint64_t seed,
   for (const std::string& name : s.columns) column_channel.push_back(FlightChannelIndex(name));
 
   Eigen::VectorXd x = trim.state;
+  // The commanded inputs as the truth's actuators apply them (a servo lag).
+  const InputVector lag = truth.model.InputLags(theta.data());
+  HeldInput held;
   for (int k = 0; k < steps; ++k) {
     const double t = k * dt;
     // Noisy measurement of the state at t_k; the controller acts on it. The
@@ -189,8 +192,9 @@ Log SimulateFlight(const Vehicle& truth, const FlightScenario& s, uint64_t seed,
     for (int i = 0; i < 4; ++i) values[1 + i].push_back(sensed(kInputNames[i], u[i]));
     // The states are logged as the controller measured them; the
     // accelerometer is measured here, with row k's inputs (decision 7).
+    held = k == 0 ? HeldInput::Steady(u, t) : NextHeldInput(held, lag, u, t);
     double outputs[kNumFlightChannels];
-    FlightOutputs(truth.model, theta.data(), x.data(), u.data(), outputs);
+    FlightOutputsAt(truth.model, theta.data(), x.data(), held, outputs);
     for (size_t c = 0; c < s.columns.size(); ++c) {
       const int channel = column_channel[c];
       values[5 + c].push_back(channel < kNumStates ? measured[channel]
@@ -198,7 +202,7 @@ Log SimulateFlight(const Vehicle& truth, const FlightScenario& s, uint64_t seed,
     }
     if (k + 1 == steps) break;
 
-    ode.SetInput(u);
+    ode.SetInput(held);
     Eigen::VectorXd next;
     if (!integrator.Reset(t, x) || !integrator.AdvanceTo(t + dt, &next)) {
       throw ComputationError("flight simulation: integrator failed at t = " + std::to_string(t) +

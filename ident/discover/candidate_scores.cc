@@ -88,9 +88,13 @@ std::vector<std::string> ChannelsReachedBy(const Vehicle& v,
   }
   const Eigen::VectorXd theta = v.parameters.Values();
   std::vector<std::string> reached;
+  const InputVector lag = v.model.InputLags(theta.data());
   for (const EstimationLog& log : logs) {
     const int n = log.NumRows();
     const int step = std::max(1, n / 400);
+    const std::vector<HeldInput> held = log.kind == LogKind::kFlight
+                                            ? HeldInputs(log.inputs, lag)
+                                            : std::vector<HeldInput>();
     for (int k = 0; k < n; k += step) {
       Eigen::MatrixXd dydp;
       bool ok;
@@ -100,7 +104,7 @@ std::vector<std::string> ChannelsReachedBy(const Vehicle& v,
       } else {
         const Eigen::VectorXd x = InitialStateFromLog(log, k);
         double y[kNumFlightChannels];
-        ok = FlightOutputJacobians(v.model, theta, x.data(), log.inputs.input(k), idx, y, nullptr,
+        ok = FlightOutputJacobians(v.model, theta, x.data(), held[k], idx, y, nullptr,
                                    &dydp);
       }
       if (!ok) continue;
@@ -121,7 +125,8 @@ std::vector<std::string> ChannelsReachedBy(const Vehicle& v,
       if (log.kind == LogKind::kFlight) {
         const Eigen::VectorXd x = InitialStateFromLog(log, k);
         Eigen::MatrixXd dfdx, dfdp;
-        if (!DerivativeJacobians(v.model, theta, x.data(), log.inputs.input(k), idx, &dfdx, &dfdp)) {
+        if (!DerivativeJacobians(v.model, theta, x.data(), held[k], held[k].t0, idx, &dfdx,
+                                 &dfdp)) {
           continue;
         }
         for (int c = 0; c < log.NumChannels(); ++c) {
@@ -233,6 +238,8 @@ Vehicle CandidateVehicle(const Vehicle& vehicle, const std::string& effect) {
     o.estimated = true;
     // ground_effect's default k_ge = 1 is the physical value, not absence.
     if (effect == "ground_effect") o.value = 0.0;
+    // Where absence has no derivative (a lag at T = 0), just beside it.
+    if (std::isfinite(spec.linearise_at)) o.value = spec.linearise_at;
     overrides[spec.name] = o;
   }
   return WithEffect(vehicle, effect, overrides);
@@ -404,8 +411,10 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
     if (it == score->linearised_estimates.end() && !score->blind_at_bounds) continue;
     const Parameter& p = candidate.parameters.Get(name);
     const double step = score->blind_at_bounds ? p.value : it->second;
+    // A lag linearised beside absence (linearise_at) is one-sided too.
+    const bool absent_at_lower = p.value == p.lower || std::isfinite(spec.linearise_at);
     const bool pinned_at_absence =
-        (p.value == p.lower && step <= p.lower) || (p.value == p.upper && step >= p.upper);
+        (absent_at_lower && step <= p.lower) || (p.value == p.upper && step >= p.upper);
     candidate.parameters.SetValue(
         name, pinned_at_absence ? std::clamp(std::fabs(spec.typical), p.lower, p.upper) : step);
   }

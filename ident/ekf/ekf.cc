@@ -304,13 +304,16 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
     record(0);
     ++*rows_done;
 
+    // The interval as applied: a lagged input (servo_lag) carries its lag
+    // from row to row at the current estimate (dynamics/held_input.h).
+    HeldInput held = HeldInput::Steady(log.inputs.input(0), log.inputs.time(0));
     for (int k = 1; k < N; ++k) {
       const double t0 = log.inputs.time(k - 1), t1 = log.inputs.time(k);
       // Predict over the hold interval [t_{k-1}, t_k) with u_{k-1}.
       const Clock::time_point c0 = Clock::now();
       if (!freeze) propagator.SetParameters(z.tail(np).cwiseProduct(scales), scales);
       const State x = z.head<kNumStates>();
-      if (!propagator.Propagate(t0, t1, log.inputs.input(k - 1), x, &transition)) {
+      if (!propagator.Propagate(t0, t1, held, x, &transition)) {
         return fail(t0, log, k - 1,
                     "propagation to " + Time(t1) + " failed: " + propagator.last_error());
       }
@@ -364,10 +367,12 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
         const double innovation = log.values(k, c) - y_hat[channel];
         return IsAngleChannel(channel) ? WrapAngle(innovation) : innovation;
       };
+      held = NextHeldInput(held, pb.vehicle.model.InputLags(propagator.theta().data()),
+                           log.inputs.input(k), t1);
       if (!present.empty()) {
         const State x_pred = z.head<kNumStates>();
         if (!FlightOutputsAndJacobian(pb.vehicle.model, propagator.theta(), free.indices(),
-                                      scales, x_pred, log.inputs.input(k), &y_hat,
+                                      scales, x_pred, held, &y_hat,
                                       need_model ? &H_model : nullptr)) {
           return fail(t1, log, k, "output model not finite (state or parameters blown up)");
         }

@@ -136,12 +136,12 @@ bool EkfPropagator::Fail(const std::string& why) {
   return false;
 }
 
-bool EkfPropagator::MidpointJacobian(const State& x_a, const State& x_b, const InputVector& u,
-                                     StateMatrix* F, StateByParameter* G) {
+bool EkfPropagator::MidpointJacobian(const State& x_a, const State& x_b, const HeldInput& u,
+                                     double t_mid, StateMatrix* F, StateByParameter* G) {
   const State x_mid = 0.5 * (x_a + x_b);
   ++counters_.jacobians;
   const int np = num_parameters();
-  if (!DerivativeJacobians(model_, theta_, x_mid.data(), u, free_indices_, &dfdx_,
+  if (!DerivativeJacobians(model_, theta_, x_mid.data(), u, t_mid, free_indices_, &dfdx_,
                            np > 0 ? &dfdp_ : nullptr)) {
     return Fail("model Jacobian not finite");
   }
@@ -151,7 +151,7 @@ bool EkfPropagator::MidpointJacobian(const State& x_a, const State& x_b, const I
   return true;
 }
 
-bool EkfPropagator::Propagate(double t0, double t1, const InputVector& u, const State& x0,
+bool EkfPropagator::Propagate(double t0, double t1, const HeldInput& u, const State& x0,
                               EkfTransition* out) {
   CHECK(t1 > t0);
   ++counters_.intervals;
@@ -182,7 +182,7 @@ bool EkfPropagator::Propagate(double t0, double t1, const InputVector& u, const 
       if (!integrator_->AdvanceTo(tb, &z_)) return Fail(integrator_->last_error());
       x_b = z_;
       if (!x_b.allFinite()) return Fail("state not finite");
-      if (!MidpointJacobian(x_a, x_b, u, &F, &G)) return false;
+      if (!MidpointJacobian(x_a, x_b, u, 0.5 * (ta + tb), &F, &G)) return false;
       ZeroOrderTransition(F, G, state_psd_, parameter_psd_, h, &step);
     } else {
       // [x; vec([I | 0])], restarted at every sub-step so that each gives its own Phi_j.
@@ -194,7 +194,7 @@ bool EkfPropagator::Propagate(double t0, double t1, const InputVector& u, const 
       }
       x_b = z_.head<kNumStates>();
       if (!z_.allFinite()) return Fail("state or sensitivities not finite");
-      if (!MidpointJacobian(x_a, x_b, u, &F, &G)) return false;
+      if (!MidpointJacobian(x_a, x_b, u, 0.5 * (ta + tb), &F, &G)) return false;
       ZeroOrderTransition(F, G, state_psd_, parameter_psd_, h, &step);  // for Qd
       const Eigen::Map<const Eigen::MatrixXd> S(z_.data() + kNumStates, kNumStates,
                                                 kNumStates + np);
@@ -215,10 +215,10 @@ bool EkfPropagator::Propagate(double t0, double t1, const InputVector& u, const 
 bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& theta,
                               const std::vector<int>& free_indices,
                               const Eigen::VectorXd& dtheta_dp, const State& x,
-                              const InputVector& u,
+                              const HeldInput& u,
                               Eigen::Matrix<double, kNumFlightChannels, 1>* y,
                               Eigen::Matrix<double, kNumFlightChannels, Eigen::Dynamic>* H) {
-  FlightOutputs(model, theta.data(), x.data(), u.data(), y->data());
+  FlightOutputsAt(model, theta.data(), x.data(), u, y->data());
   if (!y->allFinite()) return false;
   if (H == nullptr) return true;
   // Derivative directions kChunk at a time (as dynamics/model_jacobian.cc).
@@ -228,8 +228,7 @@ bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& 
   const int directions = kNumStates + np;
   H->resize(kNumFlightChannels, directions);
   std::vector<Jet> theta_jet(theta.size());
-  Jet x_jet[kNumStates], u_jet[kNumInputs], y_jet[kNumFlightChannels];
-  for (int i = 0; i < kNumInputs; ++i) u_jet[i] = Jet(u[i]);
+  Jet x_jet[kNumStates], y_jet[kNumFlightChannels];
   for (int first = 0; first < directions; first += kChunk) {
     for (int i = 0; i < theta.size(); ++i) theta_jet[i] = Jet(theta[i]);
     for (int i = 0; i < kNumStates; ++i) x_jet[i] = Jet(x[i]);
@@ -241,7 +240,7 @@ bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& 
         theta_jet[free_indices[dir - kNumStates]].v[dir - first] = dtheta_dp[dir - kNumStates];
       }
     }
-    FlightOutputs(model, theta_jet.data(), x_jet, u_jet, y_jet);
+    FlightOutputsAt(model, theta_jet.data(), x_jet, u, y_jet);
     for (int row = 0; row < kNumFlightChannels; ++row) {
       for (int dir = first; dir < last; ++dir) (*H)(row, dir) = y_jet[row].v[dir - first];
     }

@@ -104,10 +104,10 @@ class EkfPropagator {
   void SetParameters(const Eigen::VectorXd& free_values, const Eigen::VectorXd& dtheta_dp);
   const Eigen::VectorXd& theta() const { return theta_; }
 
-  // x(t1) and Phi, Qd for the interval [t0, t1) with input u held. Returns
-  // false (never throws) if CVODE fails or a value stops being finite; then
-  // last_error() says why.
-  bool Propagate(double t0, double t1, const InputVector& u, const State& x0, EkfTransition* out);
+  // x(t1) and Phi, Qd for the interval [t0, t1) with input u (held, lagged
+  // inputs as applied). Returns false (never throws) if CVODE fails or a
+  // value stops being finite; then last_error() says why.
+  bool Propagate(double t0, double t1, const HeldInput& u, const State& x0, EkfTransition* out);
   const std::string& last_error() const { return error_; }
 
   struct Counters {
@@ -118,8 +118,8 @@ class EkfPropagator {
 
  private:
   // F, G at the midpoint of a sub-step (G with respect to the filter's p).
-  bool MidpointJacobian(const State& x_a, const State& x_b, const InputVector& u, StateMatrix* F,
-                        StateByParameter* G);
+  bool MidpointJacobian(const State& x_a, const State& x_b, const HeldInput& u, double t_mid,
+                        StateMatrix* F, StateByParameter* G);
   bool Fail(const std::string& why);
 
   const VehicleModel& model_;
@@ -148,7 +148,7 @@ void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
                          const Eigen::Matrix<double, kNumStates, 1>& qx, const Eigen::VectorXd& qp,
                          double h, EkfTransition* out);
 
-// The 15 flight outputs (dynamics/outputs.h) at (x, u) and, if H is not
+// The 15 flight outputs (dynamics/outputs.h) at (x, u at its row's time) and, if H is not
 // null, their Jacobian with respect to z = [x; p] (15 x (12 + np);
 // dtheta_dp: d theta_k / d p_k), by autodiff of FlightOutputs. Without a
 // measurement effect (VehicleModel::ChangesFlightMeasurements) the state
@@ -157,7 +157,7 @@ void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
 bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& theta,
                               const std::vector<int>& free_indices,
                               const Eigen::VectorXd& dtheta_dp, const State& x,
-                              const InputVector& u,
+                              const HeldInput& u,
                               Eigen::Matrix<double, kNumFlightChannels, 1>* y,
                               Eigen::Matrix<double, kNumFlightChannels, Eigen::Dynamic>* H);
 

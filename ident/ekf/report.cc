@@ -59,6 +59,8 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
       ok = simulator.Run(log.inputs, a, b - 1, x0, &trajectory);
     } else if (ok) {
       trajectory.states.assign(1, x0);
+      trajectory.inputs.assign(
+          1, HeldInputAt(log.inputs, a, vehicle.model.InputLags(theta.data())));
     }
     if (!ok) {
       if (failed_windows) ++*failed_windows;
@@ -67,7 +69,7 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
     }
     for (int k = a; k < b; ++k) {
       const Eigen::VectorXd& x = trajectory.states[k - a];
-      FlightOutputs(vehicle.model, theta.data(), x.data(), log.inputs.input(k).data(), y);
+      FlightOutputsAt(vehicle.model, theta.data(), x.data(), trajectory.inputs[k - a], y);
       for (int c = 0; c < log.NumChannels(); ++c) out(k, c) = y[log.channels[c]];
     }
     a = b;

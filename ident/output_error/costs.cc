@@ -94,7 +94,7 @@ bool FlightSegmentCost::Predict(const double* start_state, const double* theta_s
   for (int k = first_; k <= end; ++k) {
     Eigen::VectorXd y(kNumFlightChannels);
     const Eigen::VectorXd& x = trajectory->states[k - first_];
-    FlightOutputs(model_, theta.data(), x.data(), log_.inputs.input(k).data(), y.data());
+    FlightOutputsAt(model_, theta.data(), x.data(), trajectory->inputs[k - first_], y.data());
     outputs->push_back(y);
   }
   *end_state = trajectory->states.back();
@@ -144,7 +144,7 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
       needs_model = needs_model || terms_[t].channel >= kNumStates;
     }
     if (needs_model) {
-      if (!FlightOutputJacobians(model_, theta, x.data(), log_.inputs.input(k), free_.indices(),
+      if (!FlightOutputJacobians(model_, theta, x.data(), trajectory.inputs[i], free_.indices(),
                                  y, sensitivities ? &dydx : nullptr,
                                  want_theta ? &dydp : nullptr)) {
         return false;

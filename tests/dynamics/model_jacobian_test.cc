@@ -149,7 +149,7 @@ void CheckVehicle(const Vehicle& v, unsigned seed, const std::string& what) {
   for (const Case& c : NearHoverCases(seed, 6)) {
     const std::string where = what + ", case " + std::to_string(k++);
     Eigen::MatrixXd dfdx, dfdp;
-    ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), c.input, all, &dfdx, &dfdp));
+    ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), HeldInput::Steady(c.input, 0), 0, all, &dfdx, &dfdp));
     Eigen::MatrixXd fdx, fdp;
     std::vector<double> hx, hp;
     FiniteDifferences(v, theta, c.x, c.input, all, &fdx, &fdp, &hx, &hp);
@@ -157,7 +157,7 @@ void CheckVehicle(const Vehicle& v, unsigned seed, const std::string& what) {
     ExpectJacobianNear(dfdp, fdp, hp, param_names, where + ", dfdp");
     // Without dfdp the same dfdx (same Jet evaluation of the state columns).
     Eigen::MatrixXd dfdx_only;
-    ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), c.input, {}, &dfdx_only, nullptr));
+    ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), HeldInput::Steady(c.input, 0), 0, {}, &dfdx_only, nullptr));
     EXPECT_EQ((dfdx_only - dfdx).cwiseAbs().maxCoeff(), 0.0) << where;
   }
 }
@@ -193,7 +193,7 @@ TEST(ModelJacobianTest, FlightOutputsMatchCentralDifferencesWithAllEffects) {
   for (const Case& c : NearHoverCases(4004u, 4)) {
     double y[kNumFlightChannels];
     Eigen::MatrixXd dydx, dydp;
-    ASSERT_TRUE(FlightOutputJacobians(v.model, theta, c.x.data(), c.input, all, y, &dydx, &dydp));
+    ASSERT_TRUE(FlightOutputJacobians(v.model, theta, c.x.data(), HeldInput::Steady(c.input, 0), all, y, &dydx, &dydp));
     ASSERT_EQ(dydx.rows(), kNumFlightChannels);
     ASSERT_EQ(dydp.cols(), v.parameters.size());
     auto check = [&](const Eigen::VectorXd& ad, const Outputs& fd, double h, const std::string& w) {
@@ -239,7 +239,7 @@ TEST(ModelJacobianTest, ParameterSubsetInAnyOrder) {
   const Case c = NearHoverCases(3003u, 1)[0];
   Eigen::MatrixXd dfdx, dfdp, fdx, fdp;
   std::vector<double> hx, hp;
-  ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), c.input, indices, &dfdx, &dfdp));
+  ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), HeldInput::Steady(c.input, 0), 0, indices, &dfdx, &dfdp));
   ASSERT_EQ(dfdp.cols(), static_cast<int>(indices.size()));
   FiniteDifferences(v, theta, c.x, c.input, indices, &fdx, &fdp, &hx, &hp);
   ExpectJacobianNear(dfdp, fdp, hp, names, "subset");
@@ -262,7 +262,7 @@ TEST(ModelJacobianTest, UnknownBaseParametersMatchCentralDifferences) {
   for (const Case& c : NearHoverCases(4004u, 3)) {
     Eigen::MatrixXd dfdx, dfdp, fdx, fdp;
     std::vector<double> hx, hp;
-    ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), c.input, indices, &dfdx, &dfdp));
+    ASSERT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), HeldInput::Steady(c.input, 0), 0, indices, &dfdx, &dfdp));
     FiniteDifferences(v, theta, c.x, c.input, indices, &fdx, &fdp, &hx, &hp);
     ExpectJacobianNear(dfdp, fdp, hp, names, "unknowns");
   }
@@ -275,7 +275,7 @@ TEST(ModelJacobianTest, ReportsNonFiniteDerivatives) {
   theta[kIxx] = 0.0;
   const Case c = NearHoverCases(5005u, 1)[0];
   Eigen::MatrixXd dfdx, dfdp;
-  EXPECT_FALSE(DerivativeJacobians(v.model, theta, c.x.data(), c.input, {kAlpha}, &dfdx, &dfdp));
+  EXPECT_FALSE(DerivativeJacobians(v.model, theta, c.x.data(), HeldInput::Steady(c.input, 0), 0, {kAlpha}, &dfdx, &dfdp));
 }
 
 }  // namespace

@@ -45,6 +45,35 @@ Fixture MakeFixture() {
   return f;
 }
 
+// The vehicle with the applied swashplate angles as two more states,
+// d(delta_a)/dt = (delta_logged - delta_a) / T_s (effects.md, servo_lag):
+// the lag integrated as an ODE, independent of the exponential the simulator
+// evaluates (dynamics/held_input.h).
+class LagAsStates : public OdeSystem {
+ public:
+  LagAsStates(const Vehicle& v, double T_s) : v_(v), theta_(v.parameters.Values()), T_s_(T_s) {}
+  void SetLogged(const InputVector& u) { logged_ = u; }
+  int NumStates() const override { return kNumStates + 2; }
+  int NumSensitivityParameters() const override { return 0; }
+  bool Rhs(double /*t*/, const double* z, double* zdot) const override {
+    const double u[kNumInputs] = {logged_[0], logged_[1], z[kNumStates], z[kNumStates + 1]};
+    v_.model.Derivative(theta_.data(), z, u, zdot);
+    for (int i = 0; i < 2; ++i) {
+      zdot[kNumStates + i] = (logged_[kDeltaCx + i] - z[kNumStates + i]) / T_s_;
+    }
+    return true;
+  }
+  bool Jacobians(double, const double*, Eigen::MatrixXd*, Eigen::MatrixXd*) const override {
+    return false;
+  }
+
+ private:
+  const Vehicle& v_;
+  Eigen::VectorXd theta_;
+  double T_s_;
+  InputVector logged_{};
+};
+
 TEST(Simulator, AgreesWithIndependentRk4) {
   const Fixture f = MakeFixture();
   IntegratorOptions tight;
@@ -55,19 +84,36 @@ TEST(Simulator, AgreesWithIndependentRk4) {
   Trajectory trajectory;
   ASSERT_TRUE(simulator.Run(f.inputs, 100, last, f.x0, &trajectory)) << simulator.last_error();
 
-  VehicleOde ode(f.vehicle.model, f.vehicle.parameters.Values());
-  Eigen::VectorXd x = f.x0;
-  for (int k = 100; k < last; ++k) {
-    ode.SetInput(f.inputs.input(k));
+  // Every library effect is on, servo_lag among them: its applied angles
+  // start at the first row's logged ones and lag through rows 0-99 first.
+  const double T_s = f.vehicle.parameters.Value("servo_lag.T_s");
+  ASSERT_GT(T_s, 0.0);
+  LagAsStates ode(f.vehicle, T_s);
+  Eigen::VectorXd z(kNumStates + 2);
+  z.head(kNumStates) = f.x0;
+  z[kNumStates] = f.inputs.input(0)[kDeltaCx];
+  z[kNumStates + 1] = f.inputs.input(0)[kDeltaCy];
+  for (int k = 0; k < last; ++k) {
+    ode.SetLogged(f.inputs.input(k));
     // 50 RK4 steps of 0.1 ms per 5 ms hold: error ~ h^4 * |f''''| is far
-    // below 1e-9 for this smooth model.
-    ASSERT_TRUE(IntegrateRk4(ode, f.inputs.time(k), f.inputs.time(k + 1), 50, &x));
+    // below 1e-9 for this smooth model (and for the lag, h / T_s = 1/400).
+    const Eigen::VectorXd before = z;
+    ASSERT_TRUE(IntegrateRk4(ode, f.inputs.time(k), f.inputs.time(k + 1), 50, &z));
+    if (k < 100) {  // before the replay starts only the lag runs
+      z.head(kNumStates) = before.head(kNumStates);
+      continue;
+    }
     const Eigen::VectorXd& cvode = trajectory.states[k + 1 - 100];
     for (int i = 0; i < kNumStates; ++i) {
       // Both integrators are accurate to ~1e-9 here; 1e-7 leaves margin for
       // the error growth of the unstable hover over 2 s.
-      ASSERT_NEAR(cvode[i], x[i], 1e-7 * (1 + std::fabs(x[i])))
+      ASSERT_NEAR(cvode[i], z[i], 1e-7 * (1 + std::fabs(z[i])))
           << "state " << StateName(i) << " at t = " << f.inputs.time(k + 1);
+    }
+    // The applied angles the simulator carried to the next row.
+    for (int i = 0; i < 2; ++i) {
+      ASSERT_NEAR(trajectory.inputs[k + 1 - 100].start[kDeltaCx + i], z[kNumStates + i], 1e-12)
+          << "applied swashplate angle " << i << " at t = " << f.inputs.time(k + 1);
     }
   }
 }

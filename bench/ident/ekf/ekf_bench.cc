@@ -93,7 +93,8 @@ void BM_PropagateInterval(benchmark::State& state) {
   EkfTransition transition;
   int k = 1000;
   for (auto _ : state) {
-    if (!propagator.Propagate(log.inputs.time(k), log.inputs.time(k + 1), log.inputs.input(k), x,
+    if (!propagator.Propagate(log.inputs.time(k), log.inputs.time(k + 1),
+                              HeldInput::Steady(log.inputs.input(k), log.inputs.time(k)), x,
                               &transition)) {
       state.SkipWithError(propagator.last_error().c_str());
     }

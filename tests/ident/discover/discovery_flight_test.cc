@@ -178,7 +178,9 @@ INSTANTIATE_TEST_SUITE_P(
         EffectCase{"gyro_bias", {{"b_p", 0.02}, {"b_q", -0.015}, {"b_r", 0.01}}, false, 0.7,
                    {"p", "q", "r"}, 68},
         EffectCase{"accel_bias", {{"b_ax", 0.15}, {"b_ay", -0.1}, {"b_az", 0.2}}, false, 0.7,
-                   {"ax", "ay", "az"}, 69}),
+                   {"ax", "ay", "az"}, 69},
+        // The actuator effect (issue 14): servos 40 ms late.
+        EffectCase{"servo_lag", {{"T_s", 0.04}}, false, 0.7, {"p", "q", "phi", "theta"}, 70}),
     [](const testing::TestParamInfo<EffectCase>& info) { return info.param.effect; });
 
 TEST(DiscoverFlight, RotorDragIsTakenByTheBodyDragNotByAWrongEffect) {

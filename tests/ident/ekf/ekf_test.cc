@@ -64,7 +64,7 @@ std::vector<State> ReplayTruth(const Vehicle& truth, const FlightScenario& s, co
     states.push_back(x);
     if (k + 1 == inputs.size()) break;
     const double t = k * dt;
-    ode.SetInput(inputs.input(k));
+    ode.SetInput(HeldInput::Steady(inputs.input(k), t));
     Eigen::VectorXd next;
     CHECK(integrator.Reset(t, x) && integrator.AdvanceTo(t + dt, &next));
     x = next;
@@ -316,8 +316,10 @@ TEST(EkfTest, LinearisedTransitionMatchesSensitivities) {
     for (double h : {0.005, 0.03}) {
       const double t0 = inputs.time(row);
       EkfTransition a, b;
-      ASSERT_TRUE(linearised.Propagate(t0, t0 + h, inputs.input(row), f.truth_states[row], &a));
-      ASSERT_TRUE(sensitivities.Propagate(t0, t0 + h, inputs.input(row), f.truth_states[row], &b));
+      ASSERT_TRUE(linearised.Propagate(t0, t0 + h, HeldInput::Steady(inputs.input(row), t0),
+                                       f.truth_states[row], &a));
+      ASSERT_TRUE(sensitivities.Propagate(t0, t0 + h, HeldInput::Steady(inputs.input(row), t0),
+                                          f.truth_states[row], &b));
       EXPECT_LT((a.x - b.x).cwiseAbs().maxCoeff(), 1e-9);  // both CVODE at 1e-10
       const double tol = h < 0.01 ? 1e-5 : 1e-4;
       EXPECT_LT((a.A - b.A).cwiseAbs().maxCoeff(), tol * b.A.cwiseAbs().maxCoeff())
@@ -351,7 +353,8 @@ TEST(EkfTest, ZeroOrderTransitionMatchesVanLoan) {
   for (int k = 0; k < np; ++k) scales[k] = f.truth.parameters[free[k]].scale;
   Eigen::MatrixXd dfdx, dfdp;
   ASSERT_TRUE(DerivativeJacobians(f.truth.model, f.truth.parameters.Values(),
-                                  f.truth_states[3000].data(), InputHold::FromLog(f.log).input(3000),
+                                  f.truth_states[3000].data(),
+                                  HeldInput::Steady(InputHold::FromLog(f.log).input(3000), 0), 0,
                                   free, &dfdx, &dfdp));
   const StateMatrix F = dfdx;
   const StateByParameter G = dfdp * scales.asDiagonal();
@@ -410,7 +413,7 @@ TEST(EkfTest, OutputJacobianMatchesCentralDifferences) {
     const InputHold inputs = InputHold::FromLog(f.log);
     for (int row : {500, 6000}) {
       const State x = f.truth_states[row];
-      const InputVector u = inputs.input(row);
+      const HeldInput u = HeldInput::Steady(inputs.input(row), inputs.time(row));
       Eigen::Matrix<double, kNumFlightChannels, 1> y;
       Eigen::Matrix<double, kNumFlightChannels, Eigen::Dynamic> H;
       ASSERT_TRUE(FlightOutputsAndJacobian(vehicle->model, theta, free, scales, x, u, &y, &H));
@@ -427,8 +430,8 @@ TEST(EkfTest, OutputJacobianMatchesCentralDifferences) {
           tm[free[dir - kNumStates]] -= step * scales[dir - kNumStates];
         }
         double yp[kNumFlightChannels], ym[kNumFlightChannels];
-        FlightOutputs(vehicle->model, tp.data(), xp.data(), u.data(), yp);
-        FlightOutputs(vehicle->model, tm.data(), xm.data(), u.data(), ym);
+        FlightOutputsAt(vehicle->model, tp.data(), xp.data(), u, yp);
+        FlightOutputsAt(vehicle->model, tm.data(), xm.data(), u, ym);
         for (int i = 0; i < kNumFlightChannels; ++i) {
           EXPECT_NEAR(H(i, dir), (yp[i] - ym[i]) / (2 * step), 1e-6)
               << "row " << row << " output " << i << " direction " << dir;
@@ -590,7 +593,7 @@ TEST(EkfTest, MissingChannelsAndIrregularRows) {
       const double t = f.log.Column("t")[k] + unit(rng) * (f.log.Column("t")[k + 1] -
                                                           f.log.Column("t")[k]);
       VehicleOde ode(f.truth.model, f.truth.parameters.Values());
-      ode.SetInput(InputHold::FromLog(f.log).input(k));
+      ode.SetInput(HeldInput::Steady(InputHold::FromLog(f.log).input(k), f.log.Column("t")[k]));
       Integrator integrator(ode, IntegratorOptions{});
       Eigen::VectorXd x;
       ASSERT_TRUE(integrator.Reset(f.log.Column("t")[k], f.truth_states[k]) &&
@@ -760,7 +763,7 @@ TEST(EkfTest, FailedPropagationIsReportedNotThrown) {
   x[kQ] = 0.3;
   x[kR] = 0.3;  // (Iyy - Izz) q r / Ixx: infinite
   EkfTransition transition;
-  EXPECT_FALSE(propagator.Propagate(0.0, 0.005, InputHold::FromLog(f.log).input(100), x,
+  EXPECT_FALSE(propagator.Propagate(0.0, 0.005, HeldInput::Steady(InputHold::FromLog(f.log).input(100), 0.0), x,
                                     &transition));
   EXPECT_FALSE(propagator.last_error().empty());
 }
