@@ -14,6 +14,7 @@
 #include "dynamics/effects/gyroscopic.h"
 #include "dynamics/effects/ground_effect.h"
 #include "dynamics/effects/gyro_bias.h"
+#include "dynamics/effects/motor_lag.h"
 #include "dynamics/effects/rotor_damping.h"
 #include "dynamics/effects/rotor_drag.h"
 #include "dynamics/effects/servo_lag.h"
@@ -26,7 +27,7 @@ namespace coaxid {
 using EffectTypes =
     std::tuple<GyroscopicEffect, RotorDampingEffect, GroundEffect, RotorDragEffect,
                CgOffsetEffect, SwashplateBiasEffect, WindEffect, WakeInterferenceEffect,
-               GyroBiasEffect, AccelBiasEffect, ServoLagEffect>;
+               GyroBiasEffect, AccelBiasEffect, ServoLagEffect, MotorLagEffect>;
 inline constexpr int kNumEffects = std::tuple_size_v<EffectTypes>;
 
 namespace internal {

@@ -45,32 +45,38 @@ Fixture MakeFixture() {
   return f;
 }
 
-// The vehicle with the applied swashplate angles as two more states,
-// d(delta_a)/dt = (delta_logged - delta_a) / T_s (effects.md, servo_lag):
-// the lag integrated as an ODE, independent of the exponential the simulator
-// evaluates (dynamics/held_input.h).
+// The vehicle with the applied inputs as four more states,
+// d(u_a)/dt = (u_logged - u_a) / T for each lagged input (effects.md:
+// servo_lag, motor_lag): the lags integrated as an ODE, independent of the
+// exponential the simulator evaluates (dynamics/held_input.h).
 class LagAsStates : public OdeSystem {
  public:
-  LagAsStates(const Vehicle& v, double T_s) : v_(v), theta_(v.parameters.Values()), T_s_(T_s) {}
+  explicit LagAsStates(const Vehicle& v)
+      : v_(v), theta_(v.parameters.Values()), lag_(v.model.InputLags(theta_.data())) {}
   void SetLogged(const InputVector& u) { logged_ = u; }
-  int NumStates() const override { return kNumStates + 2; }
+  int NumStates() const override { return kNumStates + kNumInputs; }
   int NumSensitivityParameters() const override { return 0; }
   bool Rhs(double /*t*/, const double* z, double* zdot) const override {
-    const double u[kNumInputs] = {logged_[0], logged_[1], z[kNumStates], z[kNumStates + 1]};
-    v_.model.Derivative(theta_.data(), z, u, zdot);
-    for (int i = 0; i < 2; ++i) {
-      zdot[kNumStates + i] = (logged_[kDeltaCx + i] - z[kNumStates + i]) / T_s_;
+    v_.model.Derivative(theta_.data(), z, z + kNumStates, zdot);
+    for (int i = 0; i < kNumInputs; ++i) {
+      zdot[kNumStates + i] = lag_[i] > 0 ? (logged_[i] - z[kNumStates + i]) / lag_[i] : 0.0;
     }
     return true;
   }
   bool Jacobians(double, const double*, Eigen::MatrixXd*, Eigen::MatrixXd*) const override {
     return false;
   }
+  // An unlagged input is the logged one.
+  void Unlagged(Eigen::VectorXd* z) const {
+    for (int i = 0; i < kNumInputs; ++i) {
+      if (!(lag_[i] > 0)) (*z)[kNumStates + i] = logged_[i];
+    }
+  }
 
  private:
   const Vehicle& v_;
   Eigen::VectorXd theta_;
-  double T_s_;
+  InputVector lag_;
   InputVector logged_{};
 };
 
@@ -84,22 +90,22 @@ TEST(Simulator, AgreesWithIndependentRk4) {
   Trajectory trajectory;
   ASSERT_TRUE(simulator.Run(f.inputs, 100, last, f.x0, &trajectory)) << simulator.last_error();
 
-  // Every library effect is on, servo_lag among them: its applied angles
-  // start at the first row's logged ones and lag through rows 0-99 first.
-  const double T_s = f.vehicle.parameters.Value("servo_lag.T_s");
-  ASSERT_GT(T_s, 0.0);
-  LagAsStates ode(f.vehicle, T_s);
-  Eigen::VectorXd z(kNumStates + 2);
+  // Every library effect is on, the actuator lags among them: the applied
+  // inputs start at the first row's logged ones and lag through rows 0-99.
+  ASSERT_TRUE(f.vehicle.model.LagsInputs());
+  LagAsStates ode(f.vehicle);
+  const InputVector lag = f.vehicle.model.InputLags(f.vehicle.parameters.Values().data());
+  Eigen::VectorXd z(kNumStates + kNumInputs);
   z.head(kNumStates) = f.x0;
-  z[kNumStates] = f.inputs.input(0)[kDeltaCx];
-  z[kNumStates + 1] = f.inputs.input(0)[kDeltaCy];
+  for (int i = 0; i < kNumInputs; ++i) z[kNumStates + i] = f.inputs.input(0)[i];
   for (int k = 0; k < last; ++k) {
     ode.SetLogged(f.inputs.input(k));
+    ode.Unlagged(&z);
     // 50 RK4 steps of 0.1 ms per 5 ms hold: error ~ h^4 * |f''''| is far
-    // below 1e-9 for this smooth model (and for the lag, h / T_s = 1/400).
+    // below 1e-9 for this smooth model (and for the lags, h / T <= 1/400).
     const Eigen::VectorXd before = z;
     ASSERT_TRUE(IntegrateRk4(ode, f.inputs.time(k), f.inputs.time(k + 1), 50, &z));
-    if (k < 100) {  // before the replay starts only the lag runs
+    if (k < 100) {  // before the replay starts only the lags run
       z.head(kNumStates) = before.head(kNumStates);
       continue;
     }
@@ -110,10 +116,13 @@ TEST(Simulator, AgreesWithIndependentRk4) {
       ASSERT_NEAR(cvode[i], z[i], 1e-7 * (1 + std::fabs(z[i])))
           << "state " << StateName(i) << " at t = " << f.inputs.time(k + 1);
     }
-    // The applied angles the simulator carried to the next row.
-    for (int i = 0; i < 2; ++i) {
-      ASSERT_NEAR(trajectory.inputs[k + 1 - 100].start[kDeltaCx + i], z[kNumStates + i], 1e-12)
-          << "applied swashplate angle " << i << " at t = " << f.inputs.time(k + 1);
+    // The applied inputs the simulator carried to the next row (rotor
+    // speeds ~300 rad/s: relative).
+    for (int i = 0; i < kNumInputs; ++i) {
+      const double expected = lag[i] > 0 ? z[kNumStates + i] : f.inputs.input(k + 1)[i];
+      ASSERT_NEAR(trajectory.inputs[k + 1 - 100].start[i], expected,
+                  1e-12 * (1 + std::fabs(expected)))
+          << "applied input " << i << " at t = " << f.inputs.time(k + 1);
     }
   }
 }

@@ -894,16 +894,55 @@ TEST(VehicleModelJetTest, JetValuePartsEqualDoubleWithAllEffects) {
 TEST(VehicleModelJetTest, LibraryHoldsTheEffectsOfTheSpec) {
   for (const char* name : {"gyroscopic", "rotor_damping", "ground_effect", "rotor_drag",
                            "cg_offset", "swashplate_bias", "wind", "wake_interference",
-                           "gyro_bias", "accel_bias"}) {
+                           "gyro_bias", "accel_bias", "servo_lag", "motor_lag"}) {
     const int i = EffectIndex(name);
     ASSERT_GE(i, 0) << name;
     bool any_visible = false;
     for (const auto& spec : EffectLibrary()[i].parameters) {
       EXPECT_GE(spec.typical, spec.lower) << name << "." << spec.name;
       EXPECT_LE(spec.typical, spec.upper) << name << "." << spec.name;
+      if (std::isfinite(spec.linearise_at)) {  // beside absence, inside the bounds
+        EXPECT_GT(spec.linearise_at, spec.lower) << name << "." << spec.name;
+        EXPECT_LT(spec.linearise_at, spec.typical) << name << "." << spec.name;
+      }
       any_visible = any_visible || spec.typical != 0.0;
     }
     EXPECT_TRUE(any_visible) << name << ": typical values must make the effect visible";
+  }
+}
+
+// The actuator effects lag exactly the inputs effects.md names: servo_lag
+// the swashplate angles (with T_s), motor_lag the rotor speeds (omega1 with
+// T_m1, omega2 with T_m2); the others are applied as logged.
+TEST(VehicleModelJetTest, ActuatorLagsActOnTheirOwnInputs) {
+  const Vehicle base = DistinctVehicle();
+  ASSERT_FALSE(base.model.LagsInputs());
+  HeldInput held = HeldInput::Steady({300.0, 320.0, 0.02, -0.01}, 1.0);
+  held.start = {280.0, 330.0, 0.0, 0.01};  // where the lags left the actuators at t0
+  const double t = 1.0 + 0.03;
+  for (const char* name : {"servo_lag", "motor_lag"}) {
+    const Vehicle v = WithTypicalEffect(base, name);
+    ASSERT_TRUE(v.model.LagsInputs()) << name;
+    const Eigen::VectorXd theta = v.parameters.Values();
+    const InputVector lag = v.model.InputLags(theta.data());
+    double u[kNumInputs];
+    v.model.AppliedInput(theta.data(), held, t, u);
+    const bool swash = std::string(name) == "servo_lag";
+    for (int i = 0; i < kNumInputs; ++i) {
+      const bool lagged = (i >= kDeltaCx) == swash;
+      if (!lagged) {
+        EXPECT_EQ(lag[i], 0.0) << name << " input " << i;
+        EXPECT_EQ(u[i], held.logged[i]) << name << " input " << i;
+        continue;
+      }
+      const char* parameter = swash ? "servo_lag.T_s" : i == kOmega1 ? "motor_lag.T_m1"
+                                                                     : "motor_lag.T_m2";
+      const double T = v.parameters.Value(parameter);
+      EXPECT_EQ(lag[i], T) << name << " input " << i;
+      EXPECT_NEAR(u[i], held.logged[i] + (held.start[i] - held.logged[i]) * std::exp(-0.03 / T),
+                  1e-12 * (1 + std::fabs(u[i])))
+          << name << " input " << i;
+    }
   }
 }
 

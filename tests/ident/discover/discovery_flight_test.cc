@@ -180,7 +180,10 @@ INSTANTIATE_TEST_SUITE_P(
         EffectCase{"accel_bias", {{"b_ax", 0.15}, {"b_ay", -0.1}, {"b_az", 0.2}}, false, 0.7,
                    {"ax", "ay", "az"}, 69},
         // The actuator effect (issue 14): servos 40 ms late.
-        EffectCase{"servo_lag", {{"T_s", 0.04}}, false, 0.7, {"p", "q", "phi", "theta"}, 70}),
+        EffectCase{"servo_lag", {{"T_s", 0.04}}, false, 0.7, {"p", "q", "phi", "theta"}, 70},
+        // Rotors 80 and 60 ms behind their speed commands.
+        EffectCase{"motor_lag", {{"T_m1", 0.08}, {"T_m2", 0.06}}, false, 0.7, {"w", "az", "r"},
+                   72}),
     [](const testing::TestParamInfo<EffectCase>& info) { return info.param.effect; });
 
 TEST(DiscoverFlight, RotorDragIsTakenByTheBodyDragNotByAWrongEffect) {
