@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -441,83 +442,78 @@ TEST(EkfTest, OutputJacobianMatchesCentralDifferences) {
   }
 }
 
-// Measurement effects in the filter (issue 14): a flight whose gyros and
-// accelerometers carry biases (the library's typical values, 1-2 x the
-// sensor noise), the EKF with gyro_bias and accel_bias declared and started
-// at 0: every bias within 3 std of the truth, and each std well below the
-// bias itself (a filter that ignored the state channels' bias columns in H
-// would leave them at their prior).
-TEST(EkfTest, EstimatesSensorBiasesWithinThreeStd) {
+// The EKF on the shipped flight scenario (`seconds` long, seed 12) whose
+// truth holds `effects` at the library's typical strength, with them declared
+// and started at `start` x typical and d held at the truth's: every parameter
+// of theirs within 3 std of the truth and known to better than a quarter of
+// itself. Returns the filter's result; *checked gets their indices in it.
+EkfResult ExpectEffectsWithinThreeStd(const std::vector<std::string>& effects, double seconds,
+                                      double start, std::vector<int>* checked) {
   const VehicleConfig config = LoadVehicleConfig(Source("configs/glmav.yaml"));
   Scenario scenario = LoadScenario(Source("configs/scenarios/flight.yaml"));
-  std::map<std::string, ParameterOverride> absent;
-  scenario.truth_effects = {TypicalEffect("gyro_bias"), TypicalEffect("accel_bias")};
-  scenario.flight.duration_s = 30;
+  for (const std::string& e : effects) scenario.truth_effects.push_back(TypicalEffect(e));
+  scenario.flight.duration_s = seconds;
   const Vehicle truth = MakeTruthVehicle(config, scenario);
   const Log log = SimulateFlight(truth, scenario.flight, 12);
   Vehicle declared = MakeVehicle(config);
   declared.parameters.SetValue("d", truth.parameters.Value("d"));
   declared.parameters.SetEstimated("d", false);
-  declared = WithEffect(WithEffect(declared, "gyro_bias", absent), "accel_bias", absent);
+  size_t parameters = 0;
+  for (const std::string& e : effects) {
+    std::map<std::string, ParameterOverride> overrides;
+    for (const auto& spec : EffectLibrary()[EffectIndex(e)].parameters) {
+      overrides[spec.name].value = start * spec.typical;
+      ++parameters;
+    }
+    declared = WithEffect(declared, e, overrides);
+  }
   EkfOptions options;
   options.smoother = true;
   const EkfResult r =
       RunEkf(declared, {MakeEstimationLog(log)}, TruthNoise(scenario.flight), options);
-  ASSERT_TRUE(r.usable) << r.failure;
-  int checked = 0;
-  for (size_t k = 0; k < r.free_names.size(); ++k) {
+  EXPECT_TRUE(r.usable) << r.failure;
+  checked->clear();
+  for (size_t k = 0; r.usable && k < r.free_names.size(); ++k) {
     const std::string& name = r.free_names[k];
-    if (name.rfind("gyro_bias.", 0) != 0 && name.rfind("accel_bias.", 0) != 0) continue;
+    const std::string effect = name.substr(0, name.find('.'));
+    if (std::find(effects.begin(), effects.end(), effect) == effects.end()) continue;
     const double want = truth.parameters.Value(name);
     EXPECT_LE(std::fabs(r.estimate[k] - want), 3 * r.estimate_std[k])
         << name << ": " << r.estimate[k] << " +- " << r.estimate_std[k] << ", truth " << want;
     EXPECT_LT(r.estimate_std[k], 0.25 * std::fabs(want)) << name;
-    const double prior = std::sqrt(r.prior_covariance(k, k)) * r.scales[k];
-    EXPECT_LT(r.estimate_std[k], 0.2 * prior) << name;
-    ++checked;
+    checked->push_back(static_cast<int>(k));
   }
-  EXPECT_EQ(checked, 6);
+  EXPECT_EQ(checked->size(), parameters);
+  return r;
 }
 
-// Actuator effects in the filter (issue 14): a flight whose servos and
+// Measurement effects in the filter (issue 14): a 30 s flight whose gyros and
+// accelerometers carry biases (the library's typical values, 1-2 x the
+// sensor noise), the EKF with gyro_bias and accel_bias declared and started
+// at 0: every bias within 3 std of the truth, and each std well below the
+// bias itself and its prior (a filter that ignored the state channels' bias
+// columns in H would leave them at their prior).
+TEST(EkfTest, EstimatesSensorBiasesWithinThreeStd) {
+  std::vector<int> checked;
+  const EkfResult r = ExpectEffectsWithinThreeStd({"gyro_bias", "accel_bias"}, 30, 0.0, &checked);
+  for (int k : checked) {
+    const double prior = std::sqrt(r.prior_covariance(k, k)) * r.scales[k];
+    EXPECT_LT(r.estimate_std[k], 0.2 * prior) << r.free_names[k];
+  }
+}
+
+// Actuator effects in the filter (issue 14): a 60 s flight whose servos and
 // rotors lag their logged commands (the library's typical time constants),
 // the EKF with servo_lag and motor_lag declared and started at half the
-// truth (at 0 a lag has no gradient, effect.h): every time constant within
-// 3 std of the truth and known to better than a quarter of itself. The
-// filter carries each lag from row to row at its current estimate
-// (dynamics/held_input.h).
+// truth (at 0 a lag has no gradient, effect.h). The filter carries each lag
+// from row to row at its current estimate (dynamics/held_input.h).
+// Measured on other seeds of the 30 s flight: 13 leaves T_s 5 std low with
+// the NIS outside its band, and the filter loses w there even with both lags
+// held at the truth (from the nominal start; from the truth it holds): a
+// start-up weakness of the filter, not of the lag; 14 and 15 pass.
 TEST(EkfTest, EstimatesActuatorLagsWithinThreeStd) {
-  const VehicleConfig config = LoadVehicleConfig(Source("configs/glmav.yaml"));
-  Scenario scenario = LoadScenario(Source("configs/scenarios/flight.yaml"));
-  scenario.truth_effects = {TypicalEffect("servo_lag"), TypicalEffect("motor_lag")};
-  const Vehicle truth = MakeTruthVehicle(config, scenario);
-  const Log log = SimulateFlight(truth, scenario.flight, 12);
-  Vehicle declared = MakeVehicle(config);
-  declared.parameters.SetValue("d", truth.parameters.Value("d"));
-  declared.parameters.SetEstimated("d", false);
-  for (const char* effect : {"servo_lag", "motor_lag"}) {
-    std::map<std::string, ParameterOverride> half;
-    for (const auto& spec : EffectLibrary()[EffectIndex(effect)].parameters) {
-      half[spec.name].value = 0.5 * spec.typical;
-    }
-    declared = WithEffect(declared, effect, half);
-  }
-  EkfOptions options;
-  options.smoother = true;
-  const EkfResult r =
-      RunEkf(declared, {MakeEstimationLog(log)}, TruthNoise(scenario.flight), options);
-  ASSERT_TRUE(r.usable) << r.failure;
-  int checked = 0;
-  for (size_t k = 0; k < r.free_names.size(); ++k) {
-    const std::string& name = r.free_names[k];
-    if (name.rfind("servo_lag.", 0) != 0 && name.rfind("motor_lag.", 0) != 0) continue;
-    const double want = truth.parameters.Value(name);
-    EXPECT_LE(std::fabs(r.estimate[k] - want), 3 * r.estimate_std[k])
-        << name << ": " << r.estimate[k] << " +- " << r.estimate_std[k] << ", truth " << want;
-    EXPECT_LT(r.estimate_std[k], 0.25 * want) << name;
-    ++checked;
-  }
-  EXPECT_EQ(checked, 3);
+  std::vector<int> checked;
+  ExpectEffectsWithinThreeStd({"servo_lag", "motor_lag"}, 60, 0.5, &checked);
 }
 
 // Glitch rows (issue 14): 1 % of the rows of the 60 s flight, chosen at
