@@ -42,6 +42,16 @@ HeldInput HeldInputAt(const InputHold& hold, int k, const InputVector& lag) {
   return held;
 }
 
+HeldInput HeldInputPath::At(int k, const InputVector& lag) const {
+  if (!AnyLag(lag)) return HeldInput::Steady(hold_.input(k), hold_.time(k));
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (lag != lag_) {
+    path_ = HeldInputs(hold_, lag);
+    lag_ = lag;
+  }
+  return path_[k];
+}
+
 std::vector<HeldInput> HeldInputs(const InputHold& hold, const InputVector& lag) {
   std::vector<HeldInput> out;
   out.reserve(hold.size());

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cmath>
+#include <mutex>
 #include <vector>
 
 #include "core/input_hold.h"
@@ -21,6 +22,10 @@
 namespace coaxid {
 
 struct HeldInput {
+  // Not an aggregate: a HeldInput brace-built from a row alone would start
+  // its lagged inputs at 0. Build one with Steady or NextHeldInput.
+  HeldInput() = default;
+
   InputVector logged{};       // the row's omega1, omega2 [rad/s], delta_cx, delta_cy [rad]
   double t0 = 0;              // start of the interval [s]
   InputVector start{};        // applied values at t0
@@ -56,5 +61,22 @@ HeldInput NextHeldInput(const HeldInput& held, const InputVector& lag, const Inp
 HeldInput HeldInputAt(const InputHold& hold, int k, const InputVector& lag);
 // Every row of a log as applied.
 std::vector<HeldInput> HeldInputs(const InputHold& hold, const InputVector& lag);
+
+// A log's rows as applied at the last lag asked for, shared by the segments
+// of a multiple-shooting fit: each asks for its first row, and the log is
+// walked once per lag instead of once per segment (a 20-minute log has 1200
+// segments). Thread-safe (Ceres evaluates segments in parallel); without a
+// lag it stores nothing.
+class HeldInputPath {
+ public:
+  explicit HeldInputPath(const InputHold& hold) : hold_(hold) {}  // hold must outlive it
+  HeldInput At(int k, const InputVector& lag) const;
+
+ private:
+  const InputHold& hold_;
+  mutable std::mutex mutex_;
+  mutable InputVector lag_{-1, -1, -1, -1};
+  mutable std::vector<HeldInput> path_;
+};
 
 }  // namespace coaxid

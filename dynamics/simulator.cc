@@ -26,7 +26,7 @@ Simulator::Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
 }
 
 bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::VectorXd& x0,
-                    Trajectory* out) {
+                    Trajectory* out, const HeldInput* start) {
   CHECK(first >= 0 && first <= last && last < inputs.size());
   CHECK_EQ(x0.size(), kNumStates);
   // Sized once and written in place: a trajectory reused for the next run
@@ -36,7 +36,7 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
   out->states.resize(samples);
   out->inputs.resize(samples);
   const InputVector lag = ode_.model().InputLags(ode_.theta().data());
-  out->inputs[0] = HeldInputAt(inputs, first, lag);
+  out->inputs[0] = start ? *start : HeldInputAt(inputs, first, lag);
   out->times[0] = inputs.time(first);
   out->states[0] = x0;
   const bool with_sensitivities = columns_ > 0;

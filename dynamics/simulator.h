@@ -50,8 +50,10 @@ class Simulator {
   // state stops being finite (blown-up parameters): never throws or aborts.
   // *out is then unspecified. Reusing one Trajectory for many runs of the
   // same length allocates nothing after the first.
+  // start: row `first` as applied, when the caller has it (HeldInputPath);
+  // null walks the lag from row 0.
   bool Run(const InputHold& inputs, int first, int last, const Eigen::VectorXd& x0,
-           Trajectory* out);
+           Trajectory* out, const HeldInput* start = nullptr);
 
   const std::string& last_error() const { return error_; }
   const Integrator& integrator() const { return *integrator_; }

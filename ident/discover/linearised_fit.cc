@@ -141,6 +141,8 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
   for (const FittedSegments& s : segments) state_columns += kNumStates * s.starts.size();
   const int theta_column = state_columns;
 
+  std::vector<std::unique_ptr<HeldInputPath>> paths;  // per log, shared by its segments
+  for (const EstimationLog& log : logs) paths.push_back(std::make_unique<HeldInputPath>(log.inputs));
   std::vector<ClusterJob> jobs;
   int segment_column = 0;
   for (size_t i = 0; i < logs.size(); ++i) {
@@ -171,7 +173,8 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
       ClusterJob job;
       job.cost = std::make_unique<FlightSegmentCost>(vehicle.model, free, log, seg.starts[j], last,
                                                      has_next, channel_std,
-                                                     options.continuity_std, options.integrator);
+                                                     options.continuity_std, options.integrator,
+                                                     paths[i].get());
       job.cluster_ends = SegmentClusterEnds(log, seg.starts[j], last, has_next, cluster_rows[i]);
       CHECK_EQ(job.cluster_ends.back(), job.cost->num_residuals());
       job.stratum = static_cast<int>(i);

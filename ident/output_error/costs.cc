@@ -13,10 +13,12 @@ namespace coaxid {
 FlightSegmentCost::FlightSegmentCost(const VehicleModel& model, const FreeParameters& free,
                                      const EstimationLog& log, int first, int last,
                                      bool has_next, const std::vector<double>& channel_std,
-                                     double continuity_std, const IntegratorOptions& integrator)
+                                     double continuity_std, const IntegratorOptions& integrator,
+                                     const HeldInputPath* path)
     : model_(model),
       free_(free),
       log_(log),
+      path_(path),
       first_(first),
       last_(last),
       has_next_(has_next),
@@ -65,12 +67,15 @@ const Trajectory* FlightSegmentCost::Simulate(const double* start_state,
     return run.ok ? &run.trajectory : nullptr;
   }
   Simulator& simulator = sensitivities ? *sensitive_ : *plain_;
-  simulator.SetTheta(free_.Theta(theta_scaled));
+  const Eigen::VectorXd theta = free_.Theta(theta_scaled);
+  simulator.SetTheta(theta);
   using Clock = std::chrono::steady_clock;
   const auto run_start = Clock::now();
+  HeldInput start;
+  if (path_) start = path_->At(first_, model_.InputLags(theta.data()));
   run.ok = simulator.Run(log_.inputs, first_, last_,
                          Eigen::Map<const Eigen::VectorXd>(start_state, kNumStates),
-                         &run.trajectory);
+                         &run.trajectory, path_ ? &start : nullptr);
   if (times_) {
     const long ns =
         std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - run_start).count();

@@ -58,10 +58,13 @@ struct SegmentCostTimes {
 
 class FlightSegmentCost : public ceres::CostFunction {
  public:
-  // channel_std[c]: noise std of log channel c. All references must outlive the cost.
+  // channel_std[c]: noise std of log channel c. path: the log's rows as
+  // applied, shared by its segments (null: each segment walks the log's
+  // lags itself). All references must outlive the cost.
   FlightSegmentCost(const VehicleModel& model, const FreeParameters& free, const EstimationLog& log,
                     int first, int last, bool has_next, const std::vector<double>& channel_std,
-                    double continuity_std, const IntegratorOptions& integrator);
+                    double continuity_std, const IntegratorOptions& integrator,
+                    const HeldInputPath* path = nullptr);
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
@@ -97,6 +100,7 @@ class FlightSegmentCost : public ceres::CostFunction {
   const VehicleModel& model_;
   const FreeParameters& free_;
   const EstimationLog& log_;
+  const HeldInputPath* path_;
   int first_, last_;
   bool has_next_;
   double continuity_weight_;

@@ -104,6 +104,7 @@ struct Assembly {
   std::vector<std::vector<FlightSegmentCost*>> segment_costs;  // per log
   std::vector<std::vector<BalanceRowsCost*>> balance_costs;    // per log
   std::vector<double*> state_blocks;                          // every segment state block
+  std::vector<std::unique_ptr<HeldInputPath>> paths;          // per log: rows as applied
 };
 
 std::vector<double> ChannelStd(const EstimationLog& log, const NoiseWeights& noise) {
@@ -178,6 +179,7 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
   ceres::LossFunction* loss = nullptr;  // owned per residual block below
   a.segments.resize(logs.size());
   a.segment_costs.resize(logs.size());
+  for (const EstimationLog& log : logs) a.paths.push_back(std::make_unique<HeldInputPath>(log.inputs));
   a.balance_costs.resize(logs.size());
   for (size_t i = 0; i < logs.size(); ++i) {
     const EstimationLog& log = logs[i];
@@ -215,7 +217,8 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
       const bool has_next = tie_segments && j + 1 < seg.starts.size();
       const int last = j + 1 < seg.starts.size() ? seg.starts[j + 1] : log.NumRows() - 1;
       auto* cost = new FlightSegmentCost(vehicle.model, free, log, seg.starts[j], last, has_next,
-                                         channel_std, options.continuity_std, options.integrator);
+                                         channel_std, options.continuity_std, options.integrator,
+                                         a.paths[i].get());
       cost->set_times(times);
       a.segment_costs[i].push_back(cost);
       // The Huber loss would also soften continuity; it is meant for outliers in outputs, and

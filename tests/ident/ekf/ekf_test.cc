@@ -259,7 +259,8 @@ TEST(EkfTest, ScaleDirectionFollowsTheModel) {
   const SimulatedFlight& f = Flight();
   std::vector<ModelSample> samples;
   for (int k = 0; k < f.log.NumRows(); k += 1500) {
-    samples.push_back({f.truth_states[k], InputHold::FromLog(f.log).input(k)});
+    samples.push_back(
+        {f.truth_states[k], HeldInput::Steady(InputHold::FromLog(f.log).input(k), 0)});
   }
   const ScaleDirection plain = FindScaleDirection(base.model, base.parameters, samples);
   ASSERT_TRUE(plain.exists);
