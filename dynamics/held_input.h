@@ -1,6 +1,7 @@
 // What the vehicle applies during one hold interval [t0, t1) of a log: the
 // logged row (held, model.md) and, for inputs that reach the vehicle through
-// a first-order actuator lag (effects.md: servo_lag), where the lag starts.
+// a first-order actuator lag (effects.md: servo_lag, motor_lag), where the
+// lag starts.
 // Inside the interval a lagged input is an exact exponential,
 //   u(t) = c + (a0 - c) exp(-(t - t0) / T),                      (A)
 // with c the logged value, a0 the applied value at t0 and T the time

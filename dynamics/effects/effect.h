@@ -15,7 +15,7 @@
 //                                            dynamics/outputs.h, true values in, logged
 //                                            values out); such an effect also sets
 //                                            kChangesFlightMeasurements = true
-// and an actuator effect (servo_lag) sets kInputLag: for each input (omega1,
+// and an actuator effect (servo_lag, motor_lag) sets kInputLag: for each input (omega1,
 // omega2, delta_cx, delta_cy) the index in p of the time constant of the
 // first-order lag through which the applied input follows the logged one, or
 // -1 (dynamics/held_input.h applies the lag, in flight).

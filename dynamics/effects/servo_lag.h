@@ -9,7 +9,6 @@
 #pragma once
 
 #include "dynamics/effects/effect.h"
-#include "dynamics/state.h"
 
 namespace coaxid {
 

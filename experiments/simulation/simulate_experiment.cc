@@ -161,7 +161,7 @@ Log SimulateFlight(const Vehicle& truth, const FlightScenario& s, uint64_t seed,
   for (const std::string& name : s.columns) column_channel.push_back(FlightChannelIndex(name));
 
   Eigen::VectorXd x = trim.state;
-  // The commanded inputs as the truth's actuators apply them (a servo lag).
+  // The commanded inputs as the truth's actuators apply them (servo, motor lags).
   const InputVector lag = truth.model.InputLags(theta.data());
   HeldInput held;
   for (int k = 0; k < steps; ++k) {

@@ -304,7 +304,7 @@ PassResult RunPass(const Problem& pb, const Eigen::VectorXd& p_start, bool freez
     record(0);
     ++*rows_done;
 
-    // The interval as applied: a lagged input (servo_lag) carries its lag
+    // The interval as applied: a lagged input (servo_lag, motor_lag) carries its lag
     // from row to row at the current estimate (dynamics/held_input.h).
     HeldInput held = HeldInput::Steady(log.inputs.input(0), log.inputs.time(0));
     for (int k = 1; k < N; ++k) {

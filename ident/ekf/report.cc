@@ -47,6 +47,8 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
   Simulator simulator(vehicle.model, theta, integrator);
   Eigen::MatrixXd out = Eigen::MatrixXd::Constant(N, log.NumChannels(), kNaN);
   Trajectory trajectory;
+  const HeldInputPath path(log.inputs);
+  const InputVector lag = vehicle.model.InputLags(theta.data());
   double y[kNumFlightChannels];
   int a = 0;
   while (a < N) {
@@ -55,12 +57,12 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
     // Window rows [a, b), from the state at row a.
     const Eigen::VectorXd x0 = start_states.row(a).transpose();
     bool ok = x0.allFinite();
+    const HeldInput start = path.At(a, lag);
     if (ok && b - 1 > a) {
-      ok = simulator.Run(log.inputs, a, b - 1, x0, &trajectory);
+      ok = simulator.Run(log.inputs, a, b - 1, x0, &trajectory, &start);
     } else if (ok) {
       trajectory.states.assign(1, x0);
-      trajectory.inputs.assign(
-          1, HeldInputAt(log.inputs, a, vehicle.model.InputLags(theta.data())));
+      trajectory.inputs.assign(1, start);
     }
     if (!ok) {
       if (failed_windows) ++*failed_windows;
