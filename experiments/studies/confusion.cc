@@ -65,6 +65,19 @@ std::string Fixed(double v) {
 
 }  // namespace
 
+std::set<std::string> TruthEffectsOfDraw(const nlohmann::json& draw) {
+  std::set<std::string> effects;
+  const std::string truth = draw["truth"].get<std::string>();
+  const std::string truth_class = draw["truth_class"].get<std::string>();
+  if (truth_class != "single" && truth_class != "pair") return effects;
+  for (size_t start = 0; start <= truth.size();) {
+    const size_t plus = std::min(truth.find('+', start), truth.size());
+    effects.insert(truth.substr(start, plus - start));
+    start = plus + 1;
+  }
+  return effects;
+}
+
 nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records) {
   std::map<std::string, std::map<std::string, int>> matrix;  // truth -> added -> runs
   std::map<std::string, Tally> right_by_truth, unexplained_by_truth, visible_by_truth;
@@ -80,14 +93,7 @@ nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records) {
     const nlohmann::json& m = r["methods"]["discover"];
     const std::string truth = draw["truth"].get<std::string>();
     const std::string truth_class = draw["truth_class"].get<std::string>();
-    std::set<std::string> truth_effects;
-    if (truth_class == "single" || truth_class == "pair") {
-      for (size_t start = 0; start <= truth.size();) {
-        const size_t plus = std::min(truth.find('+', start), truth.size());
-        truth_effects.insert(truth.substr(start, plus - start));
-        start = plus + 1;
-      }
-    }
+    const std::set<std::string> truth_effects = TruthEffectsOfDraw(draw);
     std::vector<std::string> added = m["added"].get<std::vector<std::string>>();
     std::sort(added.begin(), added.end());
     const bool unexplained = !m["unexplained"].empty();

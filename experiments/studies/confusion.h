@@ -18,6 +18,7 @@
 // Each rate with its Wilson 95 % interval.
 #pragma once
 
+#include <set>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,9 @@ inline constexpr double kVisibleRmsOverNoise = 1.1;
 // Records of a randomised study with method discover; runs without a draw or
 // whose discover failed are counted under "failed".
 nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records);
+// The library effects of a randomised run's truth, from its record's `draw`
+// (empty for no effect and for a load outside the library).
+std::set<std::string> TruthEffectsOfDraw(const nlohmann::json& draw);
 std::string ConfusionMarkdown(const nlohmann::json& confusion);
 
 }  // namespace coaxid

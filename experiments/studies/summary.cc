@@ -97,10 +97,15 @@ nlohmann::json MethodSummary(const std::string& method,
       truths[name].push_back(p["truth"].get<double>());
     }
     if (m.contains("added")) {
+      // A randomised run's truth is its own draw, not the spec's.
+      const std::set<std::string> truth = r->contains("draw")
+                                              ? TruthEffectsOfDraw((*r)["draw"])
+                                              : std::set<std::string>(undeclared.begin(),
+                                                                      undeclared.end());
       bool false_alarm = false;
       for (const auto& a : m["added"]) {
         const std::string e = a.get<std::string>();
-        if (std::find(undeclared.begin(), undeclared.end(), e) != undeclared.end()) {
+        if (truth.count(e)) {
           ++detected[e];
         } else {
           false_alarm = true;

@@ -15,6 +15,7 @@
 #include "experiments/simulation/simulate_experiment.h"
 #include "experiments/studies/confusion.h"
 #include "experiments/studies/random_draw.h"
+#include "experiments/studies/summary.h"
 #include "ident/discover/discovery.h"
 
 namespace coaxid {
@@ -178,6 +179,29 @@ TEST(Confusion, CountsWhatWasAddedAgainstTheTruth) {
   EXPECT_NE(ConfusionMarkdown(c).find("| gyroscopic alone: found, nothing else | 1/2 = 50 %"),
             std::string::npos)
       << ConfusionMarkdown(c);
+}
+
+// The per-method discover line of a randomised study judges each run
+// against its own draw: before, it judged every run against the spec's
+// truth (none), and called 48 of the 60 runs of
+// discover_sensors_actuators.yaml false alarms where none was wrong.
+TEST(Confusion, TheMethodSummaryJudgesEachRunAgainstItsOwnDraw) {
+  const StudySpec spec = LoadStudySpec(std::string(COAXID_SOURCE_DIR) +
+                                       "/configs/studies/discover_sensors_actuators.yaml");
+  std::vector<nlohmann::json> records = {
+      Record("servo_lag", "single", false, {"servo_lag"}, false),
+      Record("none", "none", false, {}, false),
+      Record("gyro_bias", "single", true, {"gyro_bias", "wind"}, false),
+      Record("outside:yaw_from_swashplate", "outside", false, {"cg_offset"}, true)};
+  for (nlohmann::json& r : records) {
+    r["point"] = 0;
+    r["simulation"] = "ok";
+    r["methods"]["discover"]["parameters"] = nlohmann::json::object();
+  }
+  const nlohmann::json summary = SummarizeStudy(spec, records);
+  const nlohmann::json& f = summary["points"][0]["methods"]["discover"]["false_alarm"];
+  EXPECT_EQ(f["runs"], 4);
+  EXPECT_EQ(f["count"], 2);  // the wind and the cg_offset
 }
 
 }  // namespace
