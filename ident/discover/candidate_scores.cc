@@ -426,6 +426,14 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
   o.noise = pass.fit.noise;
   o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
   *refit = FitOutputError(candidate, logs, o);
+  if (!refit->usable && refit->scale_move_failed) {
+    // Flight-only: the solve drifted along the scale line, out of the
+    // bounds once moved back onto the held member (measured: a motor_lag
+    // refit wanted gamma1 = 1.1e-4, 94 x its fit). The declared fit's
+    // fallback: hold the scale in the solve, so a member meets its bound.
+    o.scale_free_in_solve = false;
+    *refit = FitOutputError(candidate, logs, o);
+  }
   if (!refit->usable) {
     score->why_not_confirmed = "the joint refit failed: " + refit->why_not_usable;
     return false;
