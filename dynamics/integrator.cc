@@ -491,6 +491,8 @@ bool Integrator::Reset(double t0, const Eigen::VectorXd& x0, const Eigen::Matrix
   return impl_->Reset(t0, x0, S0);
 }
 
+void Integrator::ForgetStepHint() { impl_->step_hint = 0.0; }
+
 bool Integrator::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd* S) {
   return impl_->AdvanceTo(t1, x, S);
 }

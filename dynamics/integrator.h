@@ -85,6 +85,12 @@ class Integrator {
   // Returns false on a CVODE error (then last_error() says why).
   bool Reset(double t0, const Eigen::VectorXd& x0, const Eigen::MatrixXd* S0 = nullptr);
 
+  // The next interval after a Reset() starts from CVODE's own first-step
+  // estimate, as after construction, not from the step learnt on the last
+  // interval: a run that calls it first gives the same numbers whatever ran
+  // before it.
+  void ForgetStepHint();
+
   // Integrates from the current time to t1 > current time without stepping past t1 (stop time
   // t1), and writes the state at t1 to *x and, if S is not null, the sensitivities (n x ns) to
   // *S. The system's held input must not change during the call; change it between calls and

@@ -49,6 +49,9 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
   }
   if (with_sensitivities) out->sensitivities[0] = S;
 
+  // A run is a function of its arguments alone (the same point simulated
+  // twice gives the same numbers).
+  integrator_->ForgetStepHint();
   Eigen::VectorXd x = x0;
   Eigen::VectorXd z(variational_ ? variational_->NumStates() : 0);
   for (int k = first; k < last; ++k) {

@@ -58,14 +58,15 @@ bool FlightSegmentCost::CachedRun::At(const double* start, const double* theta) 
 const Trajectory* FlightSegmentCost::Simulate(const double* start_state,
                                               const double* theta_scaled,
                                               bool sensitivities) const {
-  // A run with sensitivities also serves a request without.
-  if (sensitive_run_.At(start_state, theta_scaled)) {
-    return sensitive_run_.ok ? &sensitive_run_.trajectory : nullptr;
+  if (!sensitivities && plain_run_.At(start_state, theta_scaled)) {
+    return plain_run_.ok ? &plain_run_.trajectory : nullptr;
   }
-  CachedRun& run = sensitivities ? sensitive_run_ : plain_run_;
-  if (!sensitivities && run.At(start_state, theta_scaled)) {
-    return run.ok ? &run.trajectory : nullptr;
-  }
+  // A run with sensitivities is not kept: 12 x (12 + P) numbers a sample
+  // would be 0.5 MB a 1 s segment, 1.7 GB for an hour of flight. Its states
+  // are kept as the point's plain run; the sensitivities live in one buffer
+  // per thread until that thread's next run.
+  thread_local Trajectory sensitive_run;
+  Trajectory& trajectory = sensitivities ? sensitive_run : plain_run_.trajectory;
   Simulator& simulator = sensitivities ? *sensitive_ : *plain_;
   const Eigen::VectorXd theta = free_.Theta(theta_scaled);
   simulator.SetTheta(theta);
@@ -73,19 +74,26 @@ const Trajectory* FlightSegmentCost::Simulate(const double* start_state,
   const auto run_start = Clock::now();
   HeldInput start;
   if (path_) start = path_->At(first_, model_.InputLags(theta.data()));
-  run.ok = simulator.Run(log_.inputs, first_, last_,
-                         Eigen::Map<const Eigen::VectorXd>(start_state, kNumStates),
-                         &run.trajectory, path_ ? &start : nullptr);
+  const bool ok = simulator.Run(log_.inputs, first_, last_,
+                                Eigen::Map<const Eigen::VectorXd>(start_state, kNumStates),
+                                &trajectory, path_ ? &start : nullptr);
   if (times_) {
     const long ns =
         std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - run_start).count();
     (sensitivities ? times_->sensitivity_runs : times_->state_runs) += 1;
     (sensitivities ? times_->sensitivity_ns : times_->state_ns) += ns;
   }
-  run.start_state = Eigen::Map<const Eigen::VectorXd>(start_state, kNumStates);
-  run.theta_scaled = Eigen::Map<const Eigen::VectorXd>(theta_scaled, free_.size());
-  run.valid = true;
-  return run.ok ? &run.trajectory : nullptr;
+  if (sensitivities) {
+    plain_run_.trajectory.times = trajectory.times;
+    plain_run_.trajectory.states = trajectory.states;
+    plain_run_.trajectory.inputs = trajectory.inputs;
+    plain_run_.trajectory.sensitivities.clear();
+  }
+  plain_run_.ok = ok;
+  plain_run_.start_state = Eigen::Map<const Eigen::VectorXd>(start_state, kNumStates);
+  plain_run_.theta_scaled = Eigen::Map<const Eigen::VectorXd>(theta_scaled, free_.size());
+  plain_run_.valid = true;
+  return ok ? &trajectory : nullptr;
 }
 
 bool FlightSegmentCost::Predict(const double* start_state, const double* theta_scaled,

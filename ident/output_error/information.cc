@@ -69,9 +69,11 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
       output_segment[i].assign(N * channels, -1);
     }
     for (size_t j = 0; j < log.segments.size(); ++j) {
-      const FlightSegmentCost& cost = *log.segments[j];
+      const FlightSegmentCost& segment = *log.segments[j];
+      const ceres::CostFunction& cost =
+          keep_flight_rows || log.compressed.empty() ? segment : *log.compressed[j];
       const int m = cost.num_residuals();
-      const bool next = cost.has_next();
+      const bool next = segment.has_next();
       RowMajor J_s(m, kNumStates), J_t(m, P), J_n(next ? m : 0, kNumStates);
       Eigen::VectorXd r(m);
       const double* parameters[] = {log.segment_states[j], theta_scaled,
@@ -79,8 +81,8 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
       double* jacobians[] = {J_s.data(), J_t.data(), next ? J_n.data() : nullptr};
       if (!cost.Evaluate(parameters, r.data(), jacobians)) {
         throw ComputationError(log.log->source + ": the model cannot be simulated at the solution "
-                               "(rows " + std::to_string(cost.first()) + "-" +
-                               std::to_string(cost.last()) + ")");
+                               "(rows " + std::to_string(segment.first()) + "-" +
+                               std::to_string(segment.last()) + ")");
       }
       for (int s = 0; s < kNumStates; ++s) {
         if (columns[i][j][s] < 0) J_s.col(s).setZero();
@@ -101,7 +103,7 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
       }
       H_tt.noalias() += J_t.transpose() * J_t;
       if (!keep_flight_rows) continue;
-      const auto& terms = cost.terms();
+      const auto& terms = segment.terms();
       for (size_t t = 0; t < terms.size(); ++t) {
         const int row = terms[t].row * channels + terms[t].column;
         rows.sensitivities.row(row) = J_t.row(t);

@@ -25,6 +25,7 @@
 
 #include <vector>
 
+#include <ceres/ceres.h>
 #include <Eigen/Core>
 
 #include "ident/estimation_log.h"
@@ -36,6 +37,9 @@ namespace coaxid {
 struct LogResidualBlocks {
   const EstimationLog* log = nullptr;
   std::vector<const FlightSegmentCost*> segments;  // flight: in time order
+  // The same segments as Ceres saw them (CompressedSegmentCost: the same
+  // J^T J, kept at the solution), used when the flight rows are not kept.
+  std::vector<const ceres::CostFunction*> compressed;
   std::vector<const double*> segment_states;       // their start states (12 each)
   std::vector<int> held_states;                    // coordinates held constant on the first one
   std::vector<const BalanceRowsCost*> balance;

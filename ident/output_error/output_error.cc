@@ -14,6 +14,7 @@
 #include "core/stopwatch.h"
 #include "dynamics/outputs.h"
 #include "ident/free_parameters.h"
+#include "ident/output_error/compressed_segment_cost.h"
 #include "ident/output_error/costs.h"
 #include "ident/output_error/information.h"
 
@@ -102,6 +103,7 @@ struct Assembly {
   std::unique_ptr<ceres::Problem> problem;
   std::vector<FittedSegments> segments;                       // per log
   std::vector<std::vector<FlightSegmentCost*>> segment_costs;  // per log
+  std::vector<std::vector<CompressedSegmentCost*>> ceres_segments;  // the same, as Ceres sees them
   std::vector<std::vector<BalanceRowsCost*>> balance_costs;    // per log
   std::vector<double*> state_blocks;                          // every segment state block
   std::vector<std::unique_ptr<HeldInputPath>> paths;          // per log: rows as applied
@@ -118,7 +120,7 @@ std::vector<double> ChannelStd(const EstimationLog& log, const NoiseWeights& noi
 void SetNoise(const std::vector<EstimationLog>& logs, const NoiseWeights& noise, Assembly* a) {
   for (size_t i = 0; i < logs.size(); ++i) {
     const std::vector<double> channel_std = ChannelStd(logs[i], noise);
-    for (FlightSegmentCost* cost : a->segment_costs[i]) cost->SetChannelStd(channel_std);
+    for (CompressedSegmentCost* cost : a->ceres_segments[i]) cost->SetChannelStd(channel_std);
     for (BalanceRowsCost* cost : a->balance_costs[i]) cost->SetChannelStd(channel_std);
   }
 }
@@ -179,6 +181,7 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
   ceres::LossFunction* loss = nullptr;  // owned per residual block below
   a.segments.resize(logs.size());
   a.segment_costs.resize(logs.size());
+  a.ceres_segments.resize(logs.size());
   for (const EstimationLog& log : logs) a.paths.push_back(std::make_unique<HeldInputPath>(log.inputs));
   a.balance_costs.resize(logs.size());
   for (size_t i = 0; i < logs.size(); ++i) {
@@ -216,11 +219,12 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
     for (size_t j = 0; j < seg.starts.size(); ++j) {
       const bool has_next = tie_segments && j + 1 < seg.starts.size();
       const int last = j + 1 < seg.starts.size() ? seg.starts[j + 1] : log.NumRows() - 1;
-      auto* cost = new FlightSegmentCost(vehicle.model, free, log, seg.starts[j], last, has_next,
-                                         channel_std, options.continuity_std, options.integrator,
-                                         a.paths[i].get());
-      cost->set_times(times);
-      a.segment_costs[i].push_back(cost);
+      auto* cost = new CompressedSegmentCost(std::make_unique<FlightSegmentCost>(
+          vehicle.model, free, log, seg.starts[j], last, has_next, channel_std,
+          options.continuity_std, options.integrator, a.paths[i].get()));
+      cost->segment()->set_times(times);
+      a.segment_costs[i].push_back(cost->segment());
+      a.ceres_segments[i].push_back(cost);
       // The Huber loss would also soften continuity; it is meant for outliers in outputs, and
       // continuity residuals are near zero at any solution, so the distortion is nil.
       loss = options.huber_threshold > 0 ? new ceres::HuberLoss(options.huber_threshold) : nullptr;
@@ -276,6 +280,7 @@ std::vector<LogResidualBlocks> ResidualBlocks(const Vehicle& vehicle,
     out[i].log = &logs[i];
     out[i].balance.assign(a.balance_costs[i].begin(), a.balance_costs[i].end());
     out[i].segments.assign(a.segment_costs[i].begin(), a.segment_costs[i].end());
+    out[i].compressed.assign(a.ceres_segments[i].begin(), a.ceres_segments[i].end());
     for (const Eigen::VectorXd& s : a.segments[i].states) out[i].segment_states.push_back(s.data());
     if (!out[i].segments.empty()) out[i].held_states = UnobservableStates(logs[i], vehicle.model);
   }

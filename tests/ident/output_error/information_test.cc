@@ -10,6 +10,7 @@
 
 #include "experiments/simulation/simulate_experiment.h"
 #include "ident/free_parameters.h"
+#include "ident/output_error/compressed_segment_cost.h"
 #include "ident/output_error/costs.h"
 #include "ident/output_error/output_error.h"
 
@@ -34,8 +35,10 @@ struct Fixture {
   }
 };
 
-// A point evaluated again is served from the segment's last run (no CVODE),
-// with the same residuals and Jacobians; a new point is simulated afresh.
+// Residuals at a point evaluated again are served from the segment's last
+// run (no CVODE), also after a run with sensitivities there; Jacobians are
+// recomputed (sensitivities are not kept) and equal; a new point is
+// simulated afresh.
 TEST(FlightSegmentCost, ReusesItsLastSimulationOnlyAtTheSamePoint) {
   const Fixture f;
   FlightSegmentCost cost(f.vehicle.model, f.free, f.flight, 0, 100, true, f.flight_std, 1e-2,
@@ -51,24 +54,28 @@ TEST(FlightSegmentCost, ReusesItsLastSimulationOnlyAtTheSamePoint) {
   double* jacobians1[] = {js.data(), j1.data(), jn.data()};
   double* jacobians2[] = {js.data(), j2.data(), jn.data()};
   ASSERT_TRUE(cost.Evaluate(blocks, r1.data(), jacobians1));
-  ASSERT_TRUE(cost.Evaluate(blocks, r2.data(), nullptr));       // served by the run above
-  ASSERT_TRUE(cost.Evaluate(blocks, r2.data(), jacobians2));    // again
-  EXPECT_EQ(times.sensitivity_runs.load(), 1);
+  ASSERT_TRUE(cost.Evaluate(blocks, r2.data(), nullptr));  // served by the run above
   EXPECT_EQ(times.state_runs.load(), 0);
+  EXPECT_EQ(r1, r2);
+  ASSERT_TRUE(cost.Evaluate(blocks, r2.data(), jacobians2));  // run again, same numbers
+  EXPECT_EQ(times.sensitivity_runs.load(), 2);
   EXPECT_EQ(r1, r2);
   EXPECT_EQ(j1, j2);
   theta[0] *= 1.001;
   ASSERT_TRUE(cost.Evaluate(blocks, r3.data(), nullptr));
   EXPECT_EQ(times.state_runs.load(), 1);
   EXPECT_NE(r1, r3);
-  theta[0] /= 1.001;  // back: still the sensitive run's point
+  theta[0] /= 1.001;  // back: a new run, without the sensitivities in its error control
   ASSERT_TRUE(cost.Evaluate(blocks, r3.data(), nullptr));
-  EXPECT_EQ(times.state_runs.load(), 1);
-  EXPECT_EQ(r1, r3);
+  EXPECT_EQ(times.state_runs.load(), 2);
+  // Two integrations to rtol 1e-7, atol 1e-9 over 100 intervals of states
+  // of order 1, weighted by 1 / 0.01: within 1e-4 of each other.
+  for (int r = 0; r < m; ++r) EXPECT_NEAR(r1[r], r3[r], 1e-4) << "residual " << r;
 }
 
 // The block-wise Schur complement equals H_tt - H_ts H_ss^-1 H_st from the
-// whole Jacobian as Ceres evaluates it (held coordinates held by a manifold).
+// whole Jacobian as Ceres evaluates it (held coordinates held by a manifold),
+// from the full segments and from the compressed ones.
 TEST(OutputErrorInformation, EqualsTheDenseSchurComplement) {
   const Fixture f;
   const std::vector<int> starts = {0, 60, 130, 200};  // three segments
@@ -98,6 +105,19 @@ TEST(OutputErrorInformation, EqualsTheDenseSchurComplement) {
   balance_blocks.balance.push_back(&balance);
   const OutputErrorInformation info =
       ComputeOutputErrorInformation({flight_blocks, balance_blocks}, theta.data(), P, false);
+  // The same through the segments as Ceres sees them (compressed).
+  std::vector<std::unique_ptr<CompressedSegmentCost>> compressed;
+  LogResidualBlocks compressed_blocks = flight_blocks;
+  for (size_t j = 0; j + 1 < starts.size(); ++j) {
+    compressed.push_back(std::make_unique<CompressedSegmentCost>(
+        std::make_unique<FlightSegmentCost>(f.vehicle.model, f.free, f.flight, starts[j],
+                                            starts[j + 1], j + 2 < starts.size(), f.flight_std,
+                                            1e-2, OutputErrorOptions::DefaultIntegrator())));
+    ASSERT_TRUE(compressed.back()->compressed());
+    compressed_blocks.compressed.push_back(compressed.back().get());
+  }
+  const OutputErrorInformation via_compressed = ComputeOutputErrorInformation(
+      {compressed_blocks, balance_blocks}, theta.data(), P, false);
 
   ceres::Problem::Options options;
   options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -129,6 +149,8 @@ TEST(OutputErrorInformation, EqualsTheDenseSchurComplement) {
   ASSERT_EQ(info.information.rows(), P);
   // Same sums in another order: agreement to round-off of the largest entries.
   EXPECT_LT((info.information - expected).cwiseAbs().maxCoeff(),
+            1e-9 * expected.cwiseAbs().maxCoeff());
+  EXPECT_LT((via_compressed.information - expected).cwiseAbs().maxCoeff(),
             1e-9 * expected.cwiseAbs().maxCoeff());
 }
 

@@ -1,0 +1,97 @@
+#include "ident/output_error/compressed_segment_cost.h"
+
+#include <cmath>
+
+#include <Eigen/QR>
+
+namespace coaxid {
+
+namespace {
+using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+}  // namespace
+
+CompressedSegmentCost::CompressedSegmentCost(std::unique_ptr<FlightSegmentCost> segment)
+    : segment_(std::move(segment)) {
+  const int P = segment_->parameter_block_sizes()[1];
+  n_ = kNumStates + P;
+  compressed_ = segment_->NumOutputResiduals() > n_ + 1;
+  *mutable_parameter_block_sizes() = segment_->parameter_block_sizes();
+  const int continuity = segment_->num_residuals() - segment_->NumOutputResiduals();
+  set_num_residuals(compressed_ ? n_ + 1 + continuity : segment_->num_residuals());
+}
+
+void CompressedSegmentCost::SetChannelStd(const std::vector<double>& channel_std) {
+  segment_->SetChannelStd(channel_std);
+  kept_.valid = false;
+}
+
+bool CompressedSegmentCost::Evaluate(double const* const* parameters, double* residuals,
+                                     double** jacobians) const {
+  if (!compressed_) return segment_->Evaluate(parameters, residuals, jacobians);
+  const bool has_next = segment_->has_next();
+  const int P = n_ - kNumStates;
+  const int m = segment_->num_residuals(), m_out = segment_->NumOutputResiduals();
+  const int continuity = m - m_out;
+  const bool want = jacobians && (jacobians[0] || jacobians[1] || (has_next && jacobians[2]));
+  const bool at_kept =
+      kept_.valid &&
+      Eigen::Map<const Eigen::VectorXd>(parameters[0], kNumStates) == kept_.start_state &&
+      Eigen::Map<const Eigen::VectorXd>(parameters[1], P) == kept_.theta_scaled &&
+      (!has_next || Eigen::Map<const Eigen::VectorXd>(parameters[2], kNumStates) ==
+                        kept_.next_state);
+  if (!want && !at_kept) {
+    thread_local Eigen::VectorXd r;
+    r.resize(m);
+    if (!segment_->Evaluate(parameters, r.data(), nullptr)) return false;
+    Eigen::Map<Eigen::VectorXd> out(residuals, num_residuals());
+    out.head(n_).setZero();
+    out[n_] = r.head(m_out).norm();
+    out.tail(continuity) = r.tail(continuity);
+    return true;
+  }
+  if (!at_kept) {
+    thread_local RowMajor J_state, J_theta, J_next;
+    thread_local Eigen::VectorXd r;
+    J_state.resize(m, kNumStates);
+    J_theta.resize(m, P);
+    J_next.resize(has_next ? m : 0, kNumStates);
+    r.resize(m);
+    double* full[] = {J_state.data(), J_theta.data(), has_next ? J_next.data() : nullptr};
+    if (!segment_->Evaluate(parameters, r.data(), full)) return false;
+    Eigen::MatrixXd A(m_out, n_);
+    A.leftCols(kNumStates) = J_state.topRows(m_out);
+    A.rightCols(P) = J_theta.topRows(m_out);
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
+    const Eigen::VectorXd qtr = qr.householderQ().adjoint() * r.head(m_out);
+    kept_.residuals.resize(num_residuals());
+    kept_.residuals.head(n_) = qtr.head(n_);
+    kept_.residuals[n_] = qtr.tail(m_out - n_).norm();  // |Q2^T r|
+    kept_.residuals.tail(continuity) = r.tail(continuity);
+    kept_.R = qr.matrixQR().topRows(n_).triangularView<Eigen::Upper>();
+    kept_.continuity_state = J_state.bottomRows(continuity);
+    kept_.continuity_theta = J_theta.bottomRows(continuity);
+    kept_.continuity_next = has_next ? Eigen::MatrixXd(J_next.bottomRows(continuity))
+                                     : Eigen::MatrixXd();
+    kept_.start_state = Eigen::Map<const Eigen::VectorXd>(parameters[0], kNumStates);
+    kept_.theta_scaled = Eigen::Map<const Eigen::VectorXd>(parameters[1], P);
+    if (has_next) kept_.next_state = Eigen::Map<const Eigen::VectorXd>(parameters[2], kNumStates);
+    kept_.valid = true;
+  }
+  Eigen::Map<Eigen::VectorXd>(residuals, num_residuals()) = kept_.residuals;
+  if (!jacobians) return true;
+  const int rows = num_residuals();
+  auto fill = [&](int block, int columns, const Eigen::MatrixXd& top,
+                  const Eigen::MatrixXd& bottom) {
+    if (!jacobians[block]) return;
+    Eigen::Map<RowMajor> J(jacobians[block], rows, columns);
+    J.setZero();
+    if (top.size() > 0) J.topRows(n_) = top;
+    J.bottomRows(continuity) = bottom;
+  };
+  fill(0, kNumStates, kept_.R.leftCols(kNumStates), kept_.continuity_state);
+  fill(1, P, kept_.R.rightCols(P), kept_.continuity_theta);
+  if (has_next) fill(2, kNumStates, Eigen::MatrixXd(), kept_.continuity_next);
+  return true;
+}
+
+}  // namespace coaxid

@@ -1,0 +1,66 @@
+// A multiple-shooting segment as Ceres sees it: its output residuals
+// compressed to the normal equations they give, so the solver stores a few
+// dozen rows a segment instead of one per logged value (a 1 s segment at
+// 200 Hz: 3000 rows x 24 columns, 0.6 MB; an hour of flight: 2 GB).
+//
+// With r the segment's weighted output residuals (FlightSegmentCost) and
+// J = [dr/ds_j | dr/dtheta] (n = 12 + P columns), the thin QR J = Q1 R gives
+// the residual vector
+//   r_c = [ Q1^T r ; sqrt(|r|^2 - |Q1^T r|^2) ]          (n + 1 rows)
+// with Jacobian [ R ; 0 ]: |r_c| = |r|, J_c^T J_c = J^T J and J_c^T r_c = J^T r,
+// so the cost, the gradient, the Gauss-Newton and Levenberg-Marquardt steps,
+// the Jacobi scaling and a robust loss on the block are those of the full
+// block (the same iterates up to rounding). The continuity residuals
+// follow unchanged. Where only the cost is asked (a trial point), the
+// output part is [0 ; |r|]: same norm. A segment with fewer output rows
+// than n + 1 is passed through uncompressed.
+//
+// The compressed block at the last point it was evaluated with Jacobians is
+// kept (n + 1 rows, not the segment's sensitivities) and served again at
+// that point (a noise relaxation re-solves from the previous solution);
+// new channel weights (SetChannelStd here, never on the segment itself)
+// drop it.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include <ceres/ceres.h>
+#include <Eigen/Core>
+
+#include "ident/output_error/costs.h"
+
+namespace coaxid {
+
+class CompressedSegmentCost : public ceres::CostFunction {
+ public:
+  // Takes ownership of the segment.
+  explicit CompressedSegmentCost(std::unique_ptr<FlightSegmentCost> segment);
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+  FlightSegmentCost* segment() const { return segment_.get(); }
+  bool compressed() const { return compressed_; }
+
+  // New noise std per log channel: the segment's, and the kept block is dropped.
+  void SetChannelStd(const std::vector<double>& channel_std);
+
+ private:
+  std::unique_ptr<FlightSegmentCost> segment_;
+  bool compressed_;
+  int n_;  // 12 + P compressed columns
+  // The kept compressed block: residuals (n + 1 + continuity) and the
+  // Jacobian over [s_j | theta] (R, n x n upper triangular).
+  struct Kept {
+    bool valid = false;
+    Eigen::VectorXd start_state, theta_scaled, next_state;
+    Eigen::VectorXd residuals;
+    Eigen::MatrixXd R;
+    // The continuity rows' Jacobians (12 x 12, 12 x P, 12 x 12).
+    Eigen::MatrixXd continuity_state, continuity_theta, continuity_next;
+  };
+  mutable Kept kept_;
+};
+
+}  // namespace coaxid

@@ -1,0 +1,82 @@
+// The compressed segment block gives Ceres the full block's cost, gradient
+// and normal equations (J^T J, J^T r); the output-error tests fit through it.
+#include "ident/output_error/compressed_segment_cost.h"
+
+#include <memory>
+
+#include <gtest/gtest.h>
+
+#include "experiments/simulation/simulate_experiment.h"
+#include "ident/free_parameters.h"
+#include "ident/output_error/output_error.h"
+
+namespace coaxid {
+namespace {
+
+using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+struct Block {
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J;  // [s_j | theta | s_j+1]
+};
+
+Block EvaluateBlock(const ceres::CostFunction& cost, const double* const* parameters, int P) {
+  const int m = cost.num_residuals();
+  RowMajor J_s(m, kNumStates), J_t(m, P), J_n(m, kNumStates);
+  Block b;
+  b.r.resize(m);
+  double* jacobians[] = {J_s.data(), J_t.data(), J_n.data()};
+  EXPECT_TRUE(cost.Evaluate(parameters, b.r.data(), jacobians));
+  b.J.resize(m, 2 * kNumStates + P);
+  b.J << J_s, J_t, J_n;
+  return b;
+}
+
+TEST(CompressedSegmentCost, GivesTheFullBlocksNormalEquationsAndCost) {
+  const Vehicle vehicle = LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
+  const FreeParameters free(vehicle.parameters);
+  FlightScenario scenario;
+  scenario.duration_s = 1.5;
+  scenario.excitation.start_s = 0.0;
+  const EstimationLog log = MakeEstimationLog(SimulateFlight(vehicle, scenario, 7));
+  const std::vector<double> channel_std(log.NumChannels(), 0.01);
+  const int first = 20, last = 220, P = free.size();
+  auto segment = [&] {
+    return std::make_unique<FlightSegmentCost>(vehicle.model, free, log, first, last, true,
+                                               channel_std, 1e-2,
+                                               OutputErrorOptions::DefaultIntegrator());
+  };
+  const auto full = segment();
+  const CompressedSegmentCost compressed(segment());
+  ASSERT_TRUE(compressed.compressed());
+  EXPECT_EQ(compressed.num_residuals(), kNumStates + P + 1 + kNumStates);
+  ASSERT_GT(full->num_residuals(), 20 * compressed.num_residuals());
+
+  // Off the simulated truth, so that the residuals are not noise alone.
+  Eigen::VectorXd s0 = InitialStateFromLog(log, first), s1 = InitialStateFromLog(log, last);
+  s0[kW] += 0.05;
+  Eigen::VectorXd theta = free.ScaledValues();
+  theta *= 1.05;
+  const double* parameters[] = {s0.data(), theta.data(), s1.data()};
+  const Block a = EvaluateBlock(*full, parameters, P);
+  const Block b = EvaluateBlock(compressed, parameters, P);
+  const Eigen::MatrixXd H = a.J.transpose() * a.J, H_c = b.J.transpose() * b.J;
+  const Eigen::VectorXd g = a.J.transpose() * a.r, g_c = b.J.transpose() * b.r;
+  // Sums of 3000 products against an orthogonal transformation of them:
+  // agreement to round-off relative to the largest entry.
+  EXPECT_LT((H - H_c).cwiseAbs().maxCoeff(), 1e-10 * H.cwiseAbs().maxCoeff());
+  EXPECT_LT((g - g_c).cwiseAbs().maxCoeff(), 1e-10 * g.cwiseAbs().maxCoeff());
+  EXPECT_NEAR(b.r.squaredNorm(), a.r.squaredNorm(), 1e-12 * a.r.squaredNorm());
+
+  // Cost alone (a trial point): same norm, at the kept point and elsewhere.
+  Eigen::VectorXd r(compressed.num_residuals()), r_full(full->num_residuals());
+  ASSERT_TRUE(compressed.Evaluate(parameters, r.data(), nullptr));
+  EXPECT_NEAR(r.squaredNorm(), a.r.squaredNorm(), 1e-12 * a.r.squaredNorm());
+  theta[0] *= 1.01;
+  ASSERT_TRUE(compressed.Evaluate(parameters, r.data(), nullptr));
+  ASSERT_TRUE(full->Evaluate(parameters, r_full.data(), nullptr));
+  EXPECT_NEAR(r.squaredNorm(), r_full.squaredNorm(), 1e-12 * r_full.squaredNorm());
+}
+
+}  // namespace
+}  // namespace coaxid
