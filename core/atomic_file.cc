@@ -36,6 +36,11 @@ int WriteAll(int fd, const char* data, size_t size) {
 }  // namespace
 
 void WriteFileAtomically(const std::string& path, const std::string& contents) {
+  WriteFileAtomically(path, [&](const EmitText& emit) { emit(contents); });
+}
+
+void WriteFileAtomically(const std::string& path,
+                         const std::function<void(const EmitText& emit)>& produce) {
   // The temporary file lives in the destination folder so that rename() is atomic
   // (same file system) and a crash leaves at most a stray *.tmp.* file, never a
   // truncated target.
@@ -60,9 +65,19 @@ void WriteFileAtomically(const std::string& path, const std::string& contents) {
     ::close(fd);
     fail_and_clean("cannot set permissions of the temporary file", error);
   }
-  if (const int error = WriteAll(fd, contents.data(), contents.size()); error != 0) {
+  int write_error = 0;
+  try {
+    produce([&](std::string_view text) {
+      if (write_error == 0) write_error = WriteAll(fd, text.data(), text.size());
+    });
+  } catch (...) {
     ::close(fd);
-    fail_and_clean("cannot write", error);
+    ::unlink(tmp.c_str());
+    throw;
+  }
+  if (write_error != 0) {
+    ::close(fd);
+    fail_and_clean("cannot write", write_error);
   }
   // close() can report a deferred write error (NFS, full disk); check it.
   if (::close(fd) != 0) fail_and_clean("cannot write", errno);

@@ -3,13 +3,23 @@
 // failure never leaves a half-written file behind (brief: Standards).
 #pragma once
 
+#include <functional>
 #include <string>
+#include <string_view>
 
 namespace coaxid {
 
 // Writes `contents` to `path` atomically. Throws InputError naming the path if
 // the folder does not exist or cannot be written.
 void WriteFileAtomically(const std::string& path, const std::string& contents);
+
+// The same for a file written piece by piece, so that it never has to be in
+// memory whole (an hour of flight's measured-versus-model table is 0.5 GB of
+// text): produce(emit) calls emit(text) as often as it likes. If produce
+// throws, nothing is left behind and the exception propagates.
+using EmitText = std::function<void(std::string_view)>;
+void WriteFileAtomically(const std::string& path,
+                         const std::function<void(const EmitText& emit)>& produce);
 
 // Creates the folder and its parents; InputError naming it if impossible.
 void MakeOutputFolder(const std::string& dir);

@@ -1,5 +1,9 @@
 #include "experiments/cli/estimation_io.h"
 
+#include <cstdio>
+
+#include "core/atomic_file.h"
+
 #include <cmath>
 #include <sstream>
 
@@ -35,23 +39,33 @@ LogSplit SplitEstimationAndValidation(const std::vector<Log>& logs,
   return s;
 }
 
-std::string MeasuredVersusModelCsv(const EstimationLog& log, const Eigen::MatrixXd& model) {
-  std::ostringstream out;
-  out.precision(10);
-  out << "t";
-  for (const std::string& name : log.channel_names) out << "," << name << "," << name << "_model";
-  out << "\n";
-  for (int k = 0; k < log.NumRows(); ++k) {
-    out << log.inputs.time(k);
-    for (int c = 0; c < log.NumChannels(); ++c) {
-      out << ",";
-      if (std::isfinite(log.values(k, c))) out << log.values(k, c);
-      out << ",";
-      if (std::isfinite(model(k, c))) out << model(k, c);
+void WriteMeasuredVersusModelCsv(const std::string& path, const EstimationLog& log,
+                                 const Eigen::MatrixXd& model) {
+  WriteFileAtomically(path, [&](const EmitText& emit) {
+    std::string text = "t";
+    for (const std::string& name : log.channel_names) text += "," + name + "," + name + "_model";
+    text += "\n";
+    char number[32];
+    auto append = [&](double value) {
+      if (!std::isfinite(value)) return;
+      text.append(number, std::snprintf(number, sizeof number, "%.10g", value));
+    };
+    for (int k = 0; k < log.NumRows(); ++k) {
+      append(log.inputs.time(k));
+      for (int c = 0; c < log.NumChannels(); ++c) {
+        text += ',';
+        append(log.values(k, c));
+        text += ',';
+        append(model(k, c));
+      }
+      text += '\n';
+      if (text.size() > (1 << 20)) {  // in pieces of about 1 MB
+        emit(text);
+        text.clear();
+      }
     }
-    out << "\n";
-  }
-  return out.str();
+    emit(text);
+  });
 }
 
 Figure MeasuredVersusModelsFigure(const std::string& title, const EstimationLog& log,
@@ -60,13 +74,17 @@ Figure MeasuredVersusModelsFigure(const std::string& title, const EstimationLog&
   f.title = title;
   f.columns = 3;
   const bool balance = log.kind == LogKind::kBalance;
+  // A flight log longer than kMaxPlotPoints samples is drawn from every
+  // stride-th sample (an hour at 200 Hz would be 720,000 points a curve, more
+  // than a figure shows and 0.3 GB of plot data).
+  const int stride = balance ? 1 : std::max(1, (log.NumRows() + kMaxPlotPoints - 1) / kMaxPlotPoints);
   for (int c = 0; c < log.NumChannels(); ++c) {
     PlotPanel panel;
     panel.title = log.channel_names[c];
     panel.x_label = balance ? "row" : "t [s]";
     PlotSeries measured{"measured", {}, {},
                         balance ? "points pt 7 ps 0.3 lc rgb '#999999'" : "lines lc rgb '#999999'"};
-    for (int k = 0; k < log.NumRows(); ++k) {
+    for (int k = 0; k < log.NumRows(); k += stride) {
       measured.x.push_back(balance ? k : log.inputs.time(k));
       measured.y.push_back(log.values(k, c));
     }
@@ -75,7 +93,7 @@ Figure MeasuredVersusModelsFigure(const std::string& title, const EstimationLog&
       const std::string colour = " lc rgb '" + model.colour + "'";
       PlotSeries s{model.name, measured.x, {},
                    (balance ? "points pt 6 ps 0.4" : "lines") + colour};
-      for (int k = 0; k < log.NumRows(); ++k) s.y.push_back((*model.values)(k, c));
+      for (int k = 0; k < log.NumRows(); k += stride) s.y.push_back((*model.values)(k, c));
       panel.series.push_back(s);
     }
     f.panels.push_back(panel);

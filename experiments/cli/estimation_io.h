@@ -26,15 +26,19 @@ struct LogSplit {
 LogSplit SplitEstimationAndValidation(const std::vector<Log>& logs,
                                       const std::vector<Log>& validate, double holdout_fraction);
 
-// CSV: t, then for each channel its measured value and the model's.
-std::string MeasuredVersusModelCsv(const EstimationLog& log, const Eigen::MatrixXd& model);
+// CSV at path (atomically, in pieces): t, then for each channel its
+// measured value and the model's.
+void WriteMeasuredVersusModelCsv(const std::string& path, const EstimationLog& log,
+                                 const Eigen::MatrixXd& model);
 // A model's outputs on a log (same shape as its values) and how to draw them.
 struct ModelCurve {
   std::string name;              // legend entry
   const Eigen::MatrixXd* values;
   std::string colour;            // gnuplot colour, e.g. "red"
 };
-// One panel per channel: measured (grey) and each model.
+// One panel per channel: measured (grey) and each model; a flight log's
+// curves at most kMaxPlotPoints points each (every stride-th sample).
+constexpr int kMaxPlotPoints = 20000;
 Figure MeasuredVersusModelsFigure(const std::string& title, const EstimationLog& log,
                                   const std::vector<ModelCurve>& models);
 // One panel per channel, measured (grey) and model (red).

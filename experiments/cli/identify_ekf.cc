@@ -278,12 +278,14 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   write("parameters.csv", EkfParametersCsv(result));
   write("innovations.csv", EkfInnovationsCsv(result));
   for (size_t i = 0; i < estimation.size(); ++i) {
-    write("fit_" + estimation[i].name + ".csv",
-          MeasuredVersusModelCsv(estimation[i], fit_predictions[i]));
+    WriteMeasuredVersusModelCsv(dir + "/fit_" + estimation[i].name + ".csv", estimation[i],
+                                fit_predictions[i]);
+    files.push_back("fit_" + estimation[i].name + ".csv");
   }
   for (size_t i = 0; i < validation.size(); ++i) {
-    write("validation_" + validation[i].name + ".csv",
-          MeasuredVersusModelCsv(validation[i], validation_predictions[i]));
+    WriteMeasuredVersusModelCsv(dir + "/validation_" + validation[i].name + ".csv",
+                                validation[i], validation_predictions[i]);
+    files.push_back("validation_" + validation[i].name + ".csv");
   }
   std::fprintf(stderr, "identify: ekf: plotting (gnuplot) ...\n");
   nlohmann::json plots = nlohmann::json::array();

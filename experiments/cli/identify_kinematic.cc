@@ -177,8 +177,8 @@ nlohmann::json IdentifyKinematic(const IdentifyRun& run) {
     corrected.metadata["corrected_from"] = paths[i];
     WriteLog(run.out + "/corrected_" + names[i] + ".csv", corrected);
     files.push_back("corrected_" + names[i] + ".csv");
-    WriteFileAtomically(run.out + "/fit_" + names[i] + ".csv",
-                        MeasuredVersusModelCsv(estimation[i], result.predictions[i]));
+    WriteMeasuredVersusModelCsv(run.out + "/fit_" + names[i] + ".csv", estimation[i],
+                                result.predictions[i]);
     files.push_back("fit_" + names[i] + ".csv");
   }
   std::vector<NamedFigure> figures;

@@ -222,7 +222,7 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
                   const std::vector<Eigen::MatrixXd>& model) {
     for (size_t i = 0; i < set.size(); ++i) {
       const std::string name = unique(std::string(part) + "_" + set[i].name);
-      WriteFileAtomically(dir + "/" + name + ".csv", MeasuredVersusModelCsv(set[i], model[i]));
+      WriteMeasuredVersusModelCsv(dir + "/" + name + ".csv", set[i], model[i]);
       files.push_back(name + ".csv");
       std::string error;
       if (RenderFigure(MeasuredVersusModelFigure(std::string(part) + ": " + set[i].source, set[i],

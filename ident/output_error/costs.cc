@@ -14,7 +14,8 @@ FlightSegmentCost::FlightSegmentCost(const VehicleModel& model, const FreeParame
                                      const EstimationLog& log, int first, int last,
                                      bool has_next, const std::vector<double>& channel_std,
                                      double continuity_std, const IntegratorOptions& integrator,
-                                     const HeldInputPath* path)
+                                     const HeldInputPath* path,
+                                     std::shared_ptr<const SegmentSimulators> simulators)
     : model_(model),
       free_(free),
       log_(log),
@@ -22,14 +23,18 @@ FlightSegmentCost::FlightSegmentCost(const VehicleModel& model, const FreeParame
       first_(first),
       last_(last),
       has_next_(has_next),
-      continuity_weight_(1.0 / continuity_std) {
+      continuity_weight_(1.0 / continuity_std),
+      simulators_(simulators ? std::move(simulators)
+                             : std::make_shared<SegmentSimulators>(model, free, integrator)) {
   CHECK(first >= 0 && first < last && last < log.NumRows());
+  SetChannelStd(channel_std);
   const int end = has_next ? last - 1 : last;
   for (int k = first; k <= end; ++k) {
     bool any = false;
     for (int c = 0; c < log.NumChannels(); ++c) {
       if (std::isfinite(log.values(k, c))) {
-        terms_.push_back({k, c, log.channels[c], 1.0 / channel_std[c]});
+        terms_.push_back({k, static_cast<std::int16_t>(c),
+                          static_cast<std::int16_t>(log.channels[c])});
         any = true;
       }
     }
@@ -39,15 +44,17 @@ FlightSegmentCost::FlightSegmentCost(const VehicleModel& model, const FreeParame
   mutable_parameter_block_sizes()->push_back(kNumStates);
   mutable_parameter_block_sizes()->push_back(free.size());
   if (has_next) mutable_parameter_block_sizes()->push_back(kNumStates);
-
-  const Eigen::VectorXd theta = free.Theta(free.ScaledValues().data());
-  plain_ = std::make_unique<Simulator>(model, theta, integrator);
-  sensitive_ = std::make_unique<Simulator>(model, theta, integrator, SensitivityOptions{true, true},
-                                           free.indices());
 }
 
+SegmentSimulators::SegmentSimulators(const VehicleModel& model, const FreeParameters& free,
+                                     const IntegratorOptions& integrator)
+    : plain(model, free.Theta(free.ScaledValues().data()), integrator),
+      sensitive(model, free.Theta(free.ScaledValues().data()), integrator,
+                SensitivityOptions{true, true}, free.indices()) {}
+
 void FlightSegmentCost::SetChannelStd(const std::vector<double>& channel_std) {
-  for (Term& t : terms_) t.weight = 1.0 / channel_std[t.column];
+  column_weight_.resize(channel_std.size());
+  for (size_t c = 0; c < channel_std.size(); ++c) column_weight_[c] = 1.0 / channel_std[c];
 }
 
 bool FlightSegmentCost::CachedRun::At(const double* start, const double* theta) const {
@@ -67,7 +74,9 @@ const Trajectory* FlightSegmentCost::Simulate(const double* start_state,
   // per thread until that thread's next run.
   thread_local Trajectory sensitive_run;
   Trajectory& trajectory = sensitivities ? sensitive_run : plain_run_.trajectory;
-  Simulator& simulator = sensitivities ? *sensitive_ : *plain_;
+  const SimulatorPool::Lease lease =
+      (sensitivities ? simulators_->sensitive : simulators_->plain).Acquire();
+  Simulator& simulator = *lease;
   const Eigen::VectorXd theta = free_.Theta(theta_scaled);
   simulator.SetTheta(theta);
   using Clock = std::chrono::steady_clock;
@@ -167,20 +176,21 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
     }
     for (; term < terms_.size() && terms_[term].row == k; ++term) {
       const Term& t = terms_[term];
-      residuals[term] = t.weight * (y[t.channel] - log_.values(k, t.column));
+      const double weight = column_weight_[t.column];
+      residuals[term] = weight * (y[t.channel] - log_.values(k, t.column));
       if (!sensitivities) continue;
       const Eigen::MatrixXd& S = trajectory.sensitivities[i];  // 12 x (12 + P)
       if (t.channel < kNumStates && states_are_logged) {
-        if (want_state) J_state.row(term) = t.weight * S.block(t.channel, 0, 1, kNumStates);
+        if (want_state) J_state.row(term) = weight * S.block(t.channel, 0, 1, kNumStates);
         if (want_theta) {
           J_theta.row(term) =
-              t.weight * S.block(t.channel, kNumStates, 1, P).cwiseProduct(free_.scales().transpose());
+              weight * S.block(t.channel, kNumStates, 1, P).cwiseProduct(free_.scales().transpose());
         }
       } else {
         const Eigen::RowVectorXd dx = dydx.row(t.channel);
-        if (want_state) J_state.row(term) = t.weight * dx * S.leftCols(kNumStates);
+        if (want_state) J_state.row(term) = weight * dx * S.leftCols(kNumStates);
         if (want_theta) {
-          J_theta.row(term) = t.weight * (dx * S.rightCols(P) + dydp.row(t.channel))
+          J_theta.row(term) = weight * (dx * S.rightCols(P) + dydp.row(t.channel))
                                              .cwiseProduct(free_.scales().transpose());
         }
       }

@@ -33,6 +33,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -40,6 +41,7 @@
 #include <ceres/ceres.h>
 
 #include "dynamics/simulator.h"
+#include "dynamics/simulator_pool.h"
 #include "dynamics/vehicle_model.h"
 #include "ident/estimation_log.h"
 #include "ident/free_parameters.h"
@@ -56,15 +58,26 @@ struct SegmentCostTimes {
   std::atomic<long> outputs_ns{0};
 };
 
+// The simulators of the segments of one problem, without and with
+// sensitivities to [s_j | the free parameters]: as many as run at once.
+struct SegmentSimulators {
+  SegmentSimulators(const VehicleModel& model, const FreeParameters& free,
+                    const IntegratorOptions& integrator);
+  mutable SimulatorPool plain, sensitive;
+};
+
 class FlightSegmentCost : public ceres::CostFunction {
  public:
   // channel_std[c]: noise std of log channel c. path: the log's rows as
   // applied, shared by its segments (null: each segment walks the log's
   // lags itself). All references must outlive the cost.
+  // simulators: shared by the segments of one problem (null: the segment
+  // makes its own).
   FlightSegmentCost(const VehicleModel& model, const FreeParameters& free, const EstimationLog& log,
                     int first, int last, bool has_next, const std::vector<double>& channel_std,
                     double continuity_std, const IntegratorOptions& integrator,
-                    const HeldInputPath* path = nullptr);
+                    const HeldInputPath* path = nullptr,
+                    std::shared_ptr<const SegmentSimulators> simulators = nullptr);
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
@@ -83,10 +96,9 @@ class FlightSegmentCost : public ceres::CostFunction {
   // Output residual r of Evaluate is terms()[r]; the continuity residuals
   // (if has_next) follow them.
   struct Term {
-    int row;      // log row
-    int column;   // log channel column
-    int channel;  // FlightChannel
-    double weight;
+    int row;             // log row
+    std::int16_t column;   // log channel column
+    std::int16_t channel;  // FlightChannel
   };
   const std::vector<Term>& terms() const { return terms_; }
 
@@ -104,6 +116,7 @@ class FlightSegmentCost : public ceres::CostFunction {
   int first_, last_;
   bool has_next_;
   double continuity_weight_;
+  std::vector<double> column_weight_;  // 1 / noise std per log channel column
   std::vector<Term> terms_;
   std::vector<int> rows_;  // distinct rows with terms, ascending
   // The trajectory from start_state with theta_scaled (with sensitivities if
@@ -117,10 +130,9 @@ class FlightSegmentCost : public ceres::CostFunction {
     Trajectory trajectory;
     bool At(const double* start_state, const double* theta_scaled) const;
   };
-  // One simulator without and one with sensitivities, and the states of the
-  // last run; Ceres may evaluate different blocks in parallel but never one
-  // block twice at once.
-  mutable std::unique_ptr<Simulator> plain_, sensitive_;
+  // The simulators, and the states of the last run; Ceres may evaluate
+  // different blocks in parallel but never one block twice at once.
+  std::shared_ptr<const SegmentSimulators> simulators_;
   mutable CachedRun plain_run_;
   SegmentCostTimes* times_ = nullptr;
 };

@@ -183,6 +183,8 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
   a.segment_costs.resize(logs.size());
   a.ceres_segments.resize(logs.size());
   for (const EstimationLog& log : logs) a.paths.push_back(std::make_unique<HeldInputPath>(log.inputs));
+  const auto simulators =
+      std::make_shared<const SegmentSimulators>(vehicle.model, free, options.integrator);
   a.balance_costs.resize(logs.size());
   for (size_t i = 0; i < logs.size(); ++i) {
     const EstimationLog& log = logs[i];
@@ -221,7 +223,7 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
       const int last = j + 1 < seg.starts.size() ? seg.starts[j + 1] : log.NumRows() - 1;
       auto* cost = new CompressedSegmentCost(std::make_unique<FlightSegmentCost>(
           vehicle.model, free, log, seg.starts[j], last, has_next, channel_std,
-          options.continuity_std, options.integrator, a.paths[i].get()));
+          options.continuity_std, options.integrator, a.paths[i].get(), simulators));
       cost->segment()->set_times(times);
       a.segment_costs[i].push_back(cost->segment());
       a.ceres_segments[i].push_back(cost);

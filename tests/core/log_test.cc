@@ -666,6 +666,27 @@ TEST(AtomicFileTest, ReplacesContentsAndLeavesNoTemporary) {
   EXPECT_EQ(ReadFile(path), "");
 }
 
+// A file written in pieces holds them in order; a producer that throws
+// leaves neither the target nor a temporary, and an old file stays as it was.
+TEST(AtomicFileTest, WrittenInPiecesOrNotAtAll) {
+  const TempDir temp;
+  const std::string target = temp.path() + "/pieces.csv";
+  WriteFileAtomically(target, [](const EmitText& emit) {
+    for (int k = 0; k < 1000; ++k) emit(std::to_string(k) + "\n");
+  });
+  std::string expected;
+  for (int k = 0; k < 1000; ++k) expected += std::to_string(k) + "\n";
+  EXPECT_EQ(ReadFile(target), expected);
+  EXPECT_THROW(WriteFileAtomically(target,
+                                   [](const EmitText& emit) {
+                                     emit("half");
+                                     throw InputError("row 7: not a number");
+                                   }),
+               InputError);
+  EXPECT_EQ(ReadFile(target), expected);
+  EXPECT_EQ(ListDir(temp.path()), std::vector<std::string>{"pieces.csv"});
+}
+
 TEST(AtomicFileTest, FailedRenameRemovesTemporary) {
   const TempDir temp;
   const std::string& dir = temp.path();
