@@ -21,6 +21,25 @@ using EmitText = std::function<void(std::string_view)>;
 void WriteFileAtomically(const std::string& path,
                          const std::function<void(const EmitText& emit)>& produce);
 
+// A table built row by row and emitted in pieces of about 1 MB: append to
+// `text`, call EndOfRow after each row; the destructor emits the rest.
+class TextPieces {
+ public:
+  explicit TextPieces(const EmitText& emit) : emit_(emit) {}
+  TextPieces(const TextPieces&) = delete;
+  TextPieces& operator=(const TextPieces&) = delete;
+  ~TextPieces() { emit_(text); }
+  void EndOfRow() {
+    if (text.size() < (1 << 20)) return;
+    emit_(text);
+    text.clear();
+  }
+  std::string text;
+
+ private:
+  const EmitText& emit_;
+};
+
 // Creates the folder and its parents; InputError naming it if impossible.
 void MakeOutputFolder(const std::string& dir);
 

@@ -42,7 +42,9 @@ LogSplit SplitEstimationAndValidation(const std::vector<Log>& logs,
 void WriteMeasuredVersusModelCsv(const std::string& path, const EstimationLog& log,
                                  const Eigen::MatrixXd& model) {
   WriteFileAtomically(path, [&](const EmitText& emit) {
-    std::string text = "t";
+    TextPieces out(emit);
+    std::string& text = out.text;
+    text = "t";
     for (const std::string& name : log.channel_names) text += "," + name + "," + name + "_model";
     text += "\n";
     char number[32];
@@ -59,12 +61,8 @@ void WriteMeasuredVersusModelCsv(const std::string& path, const EstimationLog& l
         append(model(k, c));
       }
       text += '\n';
-      if (text.size() > (1 << 20)) {  // in pieces of about 1 MB
-        emit(text);
-        text.clear();
-      }
+      out.EndOfRow();
     }
-    emit(text);
   });
 }
 

@@ -274,9 +274,14 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   };
   write("config.yaml", vehicle.ResolvedConfig());
   write("estimated_config.yaml", estimated.ResolvedConfig());
-  write("states.csv", EkfStatesCsv(result));
-  write("parameters.csv", EkfParametersCsv(result));
-  write("innovations.csv", EkfInnovationsCsv(result));
+  auto write_table = [&](const std::string& name,
+                         void (*table)(const EkfResult&, const EmitText&)) {
+    WriteFileAtomically(dir + "/" + name, [&](const EmitText& emit) { table(result, emit); });
+    files.push_back(name);
+  };
+  write_table("states.csv", EkfStatesCsv);
+  write_table("parameters.csv", EkfParametersCsv);
+  write_table("innovations.csv", EkfInnovationsCsv);
   for (size_t i = 0; i < estimation.size(); ++i) {
     WriteMeasuredVersusModelCsv(dir + "/fit_" + estimation[i].name + ".csv", estimation[i],
                                 fit_predictions[i]);

@@ -255,9 +255,11 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
   return report;
 }
 
-std::string EkfStatesCsv(const EkfResult& r) {
+void EkfStatesCsv(const EkfResult& r, const EmitText& emit) {
+  TextPieces pieces(emit);
+  std::string& out = pieces.text;
   const bool smoothed = !r.logs.empty() && r.logs[0].smoothed_states.size() > 0;
-  std::string out = "log,t";
+  out = "log,t";
   for (int i = 0; i < kNumStates; ++i) {
     out += std::string(",") + StateName(i) + "," + StateName(i) + "_std";
   }
@@ -280,14 +282,16 @@ std::string EkfStatesCsv(const EkfResult& r) {
         }
       }
       out += "\n";
+      pieces.EndOfRow();
     }
   }
-  return out;
 }
 
-std::string EkfParametersCsv(const EkfResult& r) {
+void EkfParametersCsv(const EkfResult& r, const EmitText& emit) {
+  TextPieces pieces(emit);
+  std::string& out = pieces.text;
   const bool at_estimate = r.covariance_pass;
-  std::string out = "log,t";
+  out = "log,t";
   for (const std::string& p : r.free_names) {
     out += "," + p + "," + p + "_std";
     if (at_estimate) out += "," + p + "_std_at_estimate";
@@ -302,12 +306,14 @@ std::string EkfParametersCsv(const EkfResult& r) {
         if (at_estimate) out += "," + Csv(h.parameter_std_at_estimate(k, j));
       }
       out += "\n";
+      pieces.EndOfRow();
     }
   }
-  return out;
 }
 
-std::string EkfInnovationsCsv(const EkfResult& r) {
+void EkfInnovationsCsv(const EkfResult& r, const EmitText& emit) {
+  TextPieces pieces(emit);
+  std::string& out = pieces.text;
   // Channels of every log, in first-seen order.
   std::vector<std::string> channels;
   for (const EkfLogHistory& h : r.logs) {
@@ -315,7 +321,7 @@ std::string EkfInnovationsCsv(const EkfResult& r) {
       if (std::find(channels.begin(), channels.end(), c) == channels.end()) channels.push_back(c);
     }
   }
-  std::string out = "log,t";
+  out = "log,t";
   for (const std::string& c : channels) out += "," + c + "," + c + "_std";
   out += ",nis,nis_dof\n";
   for (const EkfLogHistory& h : r.logs) {
@@ -336,9 +342,9 @@ std::string EkfInnovationsCsv(const EkfResult& r) {
         }
       }
       out += "," + Csv(h.nis[k]) + "," + std::to_string(h.nis_dof[k]) + "\n";
+      pieces.EndOfRow();
     }
   }
-  return out;
 }
 
 std::vector<EkfFigure> EkfFigures(const EkfResult& r,

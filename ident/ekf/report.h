@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "core/atomic_file.h"
 #include "core/parameters.h"
 #include "core/plot.h"
 #include "core/statistics.h"
@@ -59,15 +60,16 @@ struct EkfReportContext {
 nlohmann::json EkfReportJson(const EkfResult& result, const EkfOptions& options,
                              const ParameterSet& initial, const EkfReportContext& context);
 
+// The CSV tables, emitted in pieces (core/atomic_file.h).
 // states.csv: log, t, then per state its estimate and std (reported pass),
 // and the smoothed estimate and std when smoothed.
-std::string EkfStatesCsv(const EkfResult& result);
+void EkfStatesCsv(const EkfResult& result, const EmitText& emit);
 // parameters.csv: log, t, then per free parameter the recursive estimate, its
 // filter std, and the covariance pass's std at the final estimate.
-std::string EkfParametersCsv(const EkfResult& result);
+void EkfParametersCsv(const EkfResult& result, const EmitText& emit);
 // innovations.csv: log, t, per channel the innovation and sqrt(S_ii), then
 // the row's NIS and its degrees of freedom.
-std::string EkfInnovationsCsv(const EkfResult& result);
+void EkfInnovationsCsv(const EkfResult& result, const EmitText& emit);
 
 using EkfFigure = NamedFigure;
 // parameters.png (estimates vs time with their 3-sigma band), innovations_NAME.png
