@@ -206,8 +206,14 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   options.progress = [&](long done, long total) {
     if (done == last_report) return;
     last_report = done;
-    std::fprintf(stderr, "identify: ekf: %ld / %ld rows (%.0f %%), %.2f s\n", done, total,
-                 100.0 * done / std::max(1L, total), SecondsSince(filter_start));
+    // Rows of every pass (noise adaptations, estimation, covariance) in
+    // total, so the ETA holds for the whole run.
+    const double elapsed = SecondsSince(filter_start);
+    const double rate = done / std::max(elapsed, 1e-9);
+    std::fprintf(stderr,
+                 "identify: ekf: %ld / %ld rows (%.0f %%), %.2f s, %.0f rows/s, about %.0f s left\n",
+                 done, total, 100.0 * done / std::max(1L, total), elapsed, rate,
+                 (total - done) / std::max(rate, 1e-9));
   };
   std::fprintf(stderr, "identify: ekf on %zu log part(s), %zu free parameter(s): %d noise "
                "adaptation pass(es), estimation pass%s ...\n",
