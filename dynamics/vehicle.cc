@@ -1,5 +1,7 @@
 #include "dynamics/vehicle.h"
 
+#include <algorithm>
+
 #include "core/errors.h"
 
 namespace coaxid {
@@ -66,10 +68,12 @@ Vehicle LoadVehicle(const std::string& config_path) {
   return MakeVehicle(LoadVehicleConfig(config_path));
 }
 
-Vehicle WithEffect(const Vehicle& vehicle, const std::string& effect,
-                   const std::map<std::string, ParameterOverride>& overrides) {
+namespace {
+
+// The vehicle's config with every parameter at its current value (effect
+// parameters as overrides of their effects), to be rebuilt by MakeVehicle.
+VehicleConfig ConfigAtCurrentValues(const Vehicle& vehicle) {
   VehicleConfig config = vehicle.config;
-  config.parameters = vehicle.parameters;  // keep current values of everything
   // Drop effect parameters from the base set; MakeVehicle re-adds them.
   ParameterSet base;
   for (int i = 0; i < kNumBaseParameters; ++i) base.Add(vehicle.parameters[i]);
@@ -86,7 +90,24 @@ Vehicle WithEffect(const Vehicle& vehicle, const std::string& effect,
       o[spec.name] = keep;
     }
   }
+  return config;
+}
+
+}  // namespace
+
+Vehicle WithEffect(const Vehicle& vehicle, const std::string& effect,
+                   const std::map<std::string, ParameterOverride>& overrides) {
+  VehicleConfig config = ConfigAtCurrentValues(vehicle);
   config.effects.emplace_back(effect, overrides);
+  return MakeVehicle(config);
+}
+
+Vehicle WithoutEffect(const Vehicle& vehicle, const std::string& effect) {
+  VehicleConfig config = ConfigAtCurrentValues(vehicle);
+  auto& effects = config.effects;
+  effects.erase(std::remove_if(effects.begin(), effects.end(),
+                               [&](const auto& e) { return e.first == effect; }),
+                effects.end());
   return MakeVehicle(config);
 }
 

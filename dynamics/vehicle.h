@@ -31,5 +31,7 @@ Vehicle LoadVehicle(const std::string& config_path);
 // defaults unless given), the other parameters kept at their current values.
 Vehicle WithEffect(const Vehicle& vehicle, const std::string& effect,
                    const std::map<std::string, ParameterOverride>& overrides = {});
+// The same vehicle without the effect (nothing changes if it has none).
+Vehicle WithoutEffect(const Vehicle& vehicle, const std::string& effect);
 
 }  // namespace coaxid

@@ -9,6 +9,7 @@
 #include "core/errors.h"
 #include "core/plot.h"
 #include "core/report.h"
+#include "core/report_values.h"
 #include "dynamics/effects/effect_library.h"
 #include "experiments/cli/cli.h"
 #include "experiments/cli/estimation_io.h"
@@ -142,6 +143,15 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
     o << "Added, in order: ";
     for (const std::string& e : r.added) o << "**" << e << "** ";
     o << "\n";
+  }
+  for (const RemovedEffect& e : r.removed) {
+    o << "\nRemoved " << e.effect << " (added earlier): in the model with " << e.made_redundant_by
+      << " it removes only " << NumberText(100 * e.share_of_excess, "%.1f")
+      << " % of its channels' excess error"
+      << (std::isfinite(e.share_of_excess_held_out)
+              ? " (" + NumberText(100 * e.share_of_excess_held_out, "%.1f") + " % held out)"
+              : std::string())
+      << ": it was standing in for " << e.made_redundant_by << ".\n";
   }
   if (!r.symptoms.empty()) {
     o << "\nDeclared parameters the declared fit left at a bound (a symptom of a missing effect):\n\n";

@@ -390,6 +390,23 @@ void MarkBlindAtBounds(const Vehicle& fitted, const Vehicle& declared,
   }
 }
 
+OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
+                            const OutputErrorOptions& fit_options, const NoiseWeights& noise) {
+  OutputErrorOptions o = fit_options;
+  o.noise = noise;
+  o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
+  OutputErrorResult refit = FitOutputError(vehicle, logs, o);
+  if (!refit.usable && refit.scale_move_failed) {
+    // Flight-only: the solve drifted along the scale line, out of the
+    // bounds once moved back onto the held member (measured: a motor_lag
+    // refit wanted gamma1 = 1.1e-4, 94 x its fit). The declared fit's
+    // fallback: hold the scale in the solve, so a member meets its bound.
+    o.scale_free_in_solve = false;
+    refit = FitOutputError(vehicle, logs, o);
+  }
+  return refit;
+}
+
 bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
                     const OutputErrorOptions& fit_options, CandidateScore* score,
                     OutputErrorResult* refit, CandidatePass* next) {
@@ -420,20 +437,8 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
   }
   for (const auto& [name, value] : score->restart_values) candidate.parameters.SetValue(name, value);
   // The other parameters start at the current fit, every declared one free
-  // (a bound the declared fit pressed one against may let go): the final
-  // segment length alone, from the current noise weights.
-  OutputErrorOptions o = fit_options;
-  o.noise = pass.fit.noise;
-  o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
-  *refit = FitOutputError(candidate, logs, o);
-  if (!refit->usable && refit->scale_move_failed) {
-    // Flight-only: the solve drifted along the scale line, out of the
-    // bounds once moved back onto the held member (measured: a motor_lag
-    // refit wanted gamma1 = 1.1e-4, 94 x its fit). The declared fit's
-    // fallback: hold the scale in the solve, so a member meets its bound.
-    o.scale_free_in_solve = false;
-    *refit = FitOutputError(candidate, logs, o);
-  }
+  // (a bound the declared fit pressed one against may let go).
+  *refit = WarmRefit(candidate, logs, fit_options, pass.fit.noise);
   if (!refit->usable) {
     score->why_not_confirmed = "the joint refit failed: " + refit->why_not_usable;
     return false;

@@ -166,6 +166,12 @@ std::vector<std::string> ChannelsReachedBy(const Vehicle& vehicle,
 // Free parameters of `parameters` within 1e-6 of their range from a bound.
 std::vector<std::string> ParametersAtBounds(const ParameterSet& parameters);
 
+// A fit of `vehicle` from its current values at the final segment length
+// and the given noise weights (a refit near a solution); with the scale held
+// in the solve when moving it onto the held member fails.
+OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
+                            const OutputErrorOptions& fit_options, const NoiseWeights& noise);
+
 // Refits `score.effect` jointly into the pass's model (starting at its
 // linearised estimates, noise weights of the current fit) and tests its
 // parameters at the refit (cluster-robust Wald). Fills the score's refit

@@ -282,6 +282,71 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
   return fit.IsValid(why);
 }
 
+// Step 5 judged again once a later effect is in: each earlier-added effect
+// is taken out of the current model and the rest refitted; if it then
+// removes less than min_share_of_excess of its channels' excess error (on the
+// estimation or the held-out data) it was standing in for the later one (a
+// constant accelerometer bias for a height-dependent ground-effect thrust,
+// one constant moment for another). The least useful such effect leaves the
+// model: *pass and *now become the fit without it. False if none is
+// redundant.
+bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
+                         const std::vector<EstimationLog>& validation, const DiscoveryOptions& o,
+                         int round, CandidatePass* pass, ModelSnapshot* now,
+                         DiscoveryResult* out) {
+  const std::string& latest = out->added.back();
+  int worst = -1;
+  RemovedEffect worst_removed;
+  CandidatePass worst_pass;
+  ModelSnapshot worst_snapshot;
+  for (size_t i = 0; i + 1 < out->added.size(); ++i) {
+    const std::string& effect = out->added[i];
+    const Vehicle without = WithoutEffect(pass->fitted, effect);
+    const OutputErrorResult fit = WarmRefit(without, estimation, o.fit, pass->fit.noise);
+    if (!fit.usable) continue;  // keep it: nothing to judge against
+    Vehicle refitted = without;
+    refitted.parameters = fit.parameters;
+    ModelSnapshot snapshot = Snapshot(refitted, fit, estimation, validation, o);
+    const std::vector<std::string> channels = ChannelsReachedBy(
+        pass->fitted, EffectParameterNames(effect), estimation, pass->fit.noise);
+    RemovedEffect r;
+    r.effect = effect;
+    r.made_redundant_by = latest;
+    r.round = round;
+    r.share_of_excess =
+        ShareOfExcessRemoved(snapshot.fit, now->fit, snapshot.residual_tests, channels).share;
+    r.share_of_excess_held_out =
+        validation.empty() ? NAN
+                           : ShareOfExcessRemoved(snapshot.validation, now->validation,
+                                                  snapshot.validation_residual_tests, channels)
+                                 .share;
+    Say(o, "  without " + effect + ": it removes " + NumberText(100 * r.share_of_excess, "%.1f") +
+               " % of its channels' excess error" +
+               (std::isfinite(r.share_of_excess_held_out)
+                    ? " (" + NumberText(100 * r.share_of_excess_held_out, "%.1f") + " % held out)"
+                    : std::string()) +
+               " in the model with " + latest);
+    const bool material =
+        r.share_of_excess >= o.min_share_of_excess &&
+        !(std::isfinite(r.share_of_excess_held_out) &&
+          r.share_of_excess_held_out < o.min_share_of_excess);
+    if (material) continue;
+    if (worst < 0 || r.share_of_excess < worst_removed.share_of_excess) {
+      worst = static_cast<int>(i);
+      worst_removed = r;
+      worst_pass = LinearisePass(refitted, fit, estimation, o.fit);
+      worst_snapshot = std::move(snapshot);
+    }
+  }
+  if (worst < 0) return false;
+  Say(o, "discover: removed " + worst_removed.effect + ": made redundant by " + latest);
+  out->added.erase(out->added.begin() + worst);
+  out->removed.push_back(worst_removed);
+  *pass = std::move(worst_pass);
+  *now = std::move(worst_snapshot);
+  return true;
+}
+
 DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLog>& estimation,
                          const std::vector<EstimationLog>& validation,
                          const DiscoveryOptions& options) {
@@ -367,7 +432,17 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         for (const std::string& c : distorted[name]) symptom_channels.push_back(c);
       }
       MarkBlindAtBounds(pass.fitted, declared, distorted, estimation, pass.fit.noise, &scores);
-      const std::vector<int> shortlist = Shortlist(scores, symptom_channels, options);
+      std::vector<int> shortlist = Shortlist(scores, symptom_channels, options);
+      // A removed effect does not come back (no cycling).
+      shortlist.erase(
+          std::remove_if(shortlist.begin(), shortlist.end(),
+                         [&](int k) {
+                           return std::any_of(out.removed.begin(), out.removed.end(),
+                                              [&](const RemovedEffect& r) {
+                                                return r.effect == scores[k].effect;
+                                              });
+                         }),
+          shortlist.end());
       for (int k : shortlist) {
         const CandidateScore& s = scores[k];
         if (s.restart_values.empty()) continue;
@@ -403,6 +478,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         }
         out.added.push_back(s.effect);
         accepted = true;
+        if (out.added.size() >= 2) DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out);
       }
     }
     out.candidates.insert(out.candidates.end(), scores.begin(), scores.end());
@@ -486,11 +562,22 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
                         {"released_in_final_model", b.released},
                         {"text", b.text}});
   }
+  nlohmann::json removed = nlohmann::json::array();
+  for (const RemovedEffect& e : r.removed) {
+    removed.push_back({{"effect", e.effect},
+                       {"made_redundant_by", e.made_redundant_by},
+                       {"round", e.round},
+                       {"share_of_excess", e.share_of_excess},
+                       {"share_of_excess_held_out", std::isfinite(e.share_of_excess_held_out)
+                                                        ? nlohmann::json(e.share_of_excess_held_out)
+                                                        : nlohmann::json()}});
+  }
   return {{"baseline", SnapshotJson(r.baseline, has_validation)},
           {"start", r.start},
           {"symptoms", symptoms},
           {"candidates", candidates},
           {"added", r.added},
+          {"removed", removed},
           {"added_parameters", added_parameters},
           {"final", SnapshotJson(r.final, has_validation)},
           {"unexplained", unexplained},

@@ -109,12 +109,25 @@ struct BoundSymptom {
   std::string text;                   // for people
 };
 
+// An effect added in an earlier round that a later one made redundant: in
+// the model that holds both, it removes less than min_share_of_excess of its
+// channels' excess error (step 5 judged again), so it was taken out (and is
+// not a candidate again).
+struct RemovedEffect {
+  std::string effect;
+  std::string made_redundant_by;  // the effect added in that round
+  int round = 0;
+  double share_of_excess = 0;           // what it still removed, estimation data
+  double share_of_excess_held_out = 0;  // NaN without held-out data
+};
+
 struct DiscoveryResult {
   ModelSnapshot baseline, final;
   std::vector<BoundSymptom> symptoms;
   std::string start;  // how the declared fit was started
   std::vector<CandidateScore> candidates;  // every round's scores, round by round
   std::vector<std::string> added;
+  std::vector<RemovedEffect> removed;
   std::vector<UnexplainedChannel> unexplained;
   double seconds = 0;
 };

@@ -991,3 +991,31 @@ TEST(VehicleModelJetTest, MeasurementBiasesMoveOnlyTheirChannels) {
 
 }  // namespace
 }  // namespace coaxid
+
+namespace coaxid {
+namespace {
+
+// WithoutEffect undoes WithEffect: the same effects and parameters (values,
+// bounds, estimated flags) as before, whichever effect of two is taken out.
+TEST(VehicleTest, WithoutEffectUndoesWithEffect) {
+  const Vehicle base = WithTypicalEffect(DistinctVehicle(), "cg_offset");
+  const Vehicle both = WithTypicalEffect(base, "wind");
+  auto expect_same = [](const Vehicle& a, const Vehicle& b, const std::string& what) {
+    EXPECT_EQ(a.EffectNames(), b.EffectNames()) << what;
+    ASSERT_EQ(a.parameters.size(), b.parameters.size()) << what;
+    for (int i = 0; i < a.parameters.size(); ++i) {
+      EXPECT_EQ(a.parameters[i].name, b.parameters[i].name) << what;
+      EXPECT_EQ(a.parameters[i].value, b.parameters[i].value) << what << " " << a.parameters[i].name;
+      EXPECT_EQ(a.parameters[i].lower, b.parameters[i].lower) << what;
+      EXPECT_EQ(a.parameters[i].upper, b.parameters[i].upper) << what;
+      EXPECT_EQ(a.parameters[i].estimated, b.parameters[i].estimated) << what;
+    }
+  };
+  expect_same(WithoutEffect(both, "wind"), base, "without wind");
+  expect_same(WithoutEffect(both, "cg_offset"), WithTypicalEffect(DistinctVehicle(), "wind"),
+              "without cg_offset");
+  expect_same(WithoutEffect(base, "wind"), base, "without an effect it does not have");
+}
+
+}  // namespace
+}  // namespace coaxid
