@@ -1,12 +1,10 @@
 #include "experiments/cli/estimation_io.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "core/atomic_file.h"
-
-#include <cmath>
-#include <sstream>
-
 #include "ident/baseline/balance_holds.h"
 
 namespace coaxid {
@@ -75,7 +73,8 @@ Figure MeasuredVersusModelsFigure(const std::string& title, const EstimationLog&
   // A flight log longer than kMaxPlotPoints samples is drawn from every
   // stride-th sample (an hour at 200 Hz would be 720,000 points a curve, more
   // than a figure shows and 0.3 GB of plot data).
-  const int stride = balance ? 1 : std::max(1, (log.NumRows() + kMaxPlotPoints - 1) / kMaxPlotPoints);
+  const int stride =
+      balance ? 1 : std::max(1, (log.NumRows() + kMaxPlotPoints - 1) / kMaxPlotPoints);
   for (int c = 0; c < log.NumChannels(); ++c) {
     PlotPanel panel;
     panel.title = log.channel_names[c];
