@@ -478,7 +478,9 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         }
         out.added.push_back(s.effect);
         accepted = true;
-        if (out.added.size() >= 2) DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out);
+        if (out.added.size() >= 2) {
+          DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out);
+        }
       }
     }
     out.candidates.insert(out.candidates.end(), scores.begin(), scores.end());
