@@ -96,11 +96,12 @@ Figure Spectra(const DiscoveryResult& r) {
 }
 
 // "; blind at the bounds (refitted with Cx, Cy at their config values)".
-std::string BlindAtBoundsText(const CandidateScore& s) {
-  if (!s.blind_at_bounds) return "";
+std::string RestartsText(const CandidateScore& s) {
+  if (s.restart_values.empty()) return "";
   std::string names;
   for (const auto& [name, value] : s.restart_values) names += (names.empty() ? "" : ", ") + name;
-  return "; blind at the bounds (refitted with " + names + " at their config values)";
+  return std::string(s.blind_at_bounds ? "; blind at the bounds" : "") + " (refitted with " +
+         names + " at their config values)";
 }
 
 std::string FitTable(const DiscoveryResult& r, bool has_validation) {
@@ -176,7 +177,7 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
       << (s.testable ? Num(s.statistic) : "-") << " | " << (s.testable ? Num(s.p_value, "%.3g") : "-")
       << " | " << (s.testable ? Num(s.p_corrected, "%.3g") : "-") << " | "
       << (s.testable ? Num(s.predicted_share, "%.3g") : "-") << " | "
-      << (!s.testable ? "not testable" : s.passes ? "yes" : "no") << BlindAtBoundsText(s) << " | "
+      << (!s.testable ? "not testable" : s.passes ? "yes" : "no") << RestartsText(s) << " | "
       << (s.refitted ? Num(s.wald_p_value, "%.3g") : "-") << " | "
       << (s.refitted ? Num(100 * s.share_of_excess, "%.1f") + " % (" +
                            (std::isfinite(s.share_of_excess_held_out)

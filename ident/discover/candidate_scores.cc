@@ -172,7 +172,7 @@ nlohmann::json CandidateScore::ToJson() const {
       {"num_free_parameters", num_free_parameters}};
   if (!testable) j["why_not_testable"] = why_not_testable;
   j["blind_at_bounds"] = blind_at_bounds;
-  if (blind_at_bounds) j["restart_values"] = restart_values;
+  if (!restart_values.empty()) j["restart_values"] = restart_values;
   if (testable) {
     j["linearised_estimates"] = linearised_estimates;
     j["beyond_linear_range"] = beyond_linear_range;
@@ -363,10 +363,18 @@ bool ReachesAny(const std::vector<std::string>& channels, const std::vector<std:
 // Restarts only the parameters whose channels the candidate reaches from
 // there: restarting every parameter at a bound (Ixx at 50 x its value on a
 // flight-only log) left the right candidate's refit worse than its warm start.
-void MarkBlindAtBounds(const Vehicle& fitted, const Vehicle& declared,
-                       const std::map<std::string, std::vector<std::string>>& distorted,
-                       const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
-                       std::vector<CandidateScore>* scores) {
+// A candidate that already reaches those channels restarts them too: from the
+// bound its refit stays in the declared fit's basin (measured: an undeclared
+// CG offset with a balance log, d pressed to its lower bound and Iyy to its
+// upper one so that the swashplate's trim moment vanishes; the cg_offset
+// refit from there was never tried, from the config it is the right model;
+// an undeclared swashplate bias, low flight, flight only, sigma0 and Cy at
+// bounds: the passing swashplate_bias refitted from there stayed
+// insignificant, from the config values it is found).
+void MarkRestartsAtBounds(const Vehicle& fitted, const Vehicle& declared,
+                          const std::map<std::string, std::vector<std::string>>& distorted,
+                          const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
+                          std::vector<CandidateScore>* scores) {
   for (const auto& [name, channels] : distorted) {
     if (!declared.parameters.Has(name)) continue;  // an added effect's parameter
     const Parameter& p = fitted.parameters.Get(name);
@@ -375,6 +383,10 @@ void MarkBlindAtBounds(const Vehicle& fitted, const Vehicle& declared,
     Vehicle inside = fitted;
     inside.parameters.SetValue(name, config);
     for (CandidateScore& s : *scores) {
+      if (s.testable && ReachesAny(s.channels, channels)) {
+        s.restart_values[name] = config;
+        continue;
+      }
       const std::vector<std::string> reached = ChannelsReachedBy(
           CandidateVehicle(inside, s.effect), EffectParameterNames(s.effect), logs, noise);
       const bool newly = std::any_of(reached.begin(), reached.end(), [&](const std::string& c) {
@@ -391,10 +403,11 @@ void MarkBlindAtBounds(const Vehicle& fitted, const Vehicle& declared,
 }
 
 OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
-                            const OutputErrorOptions& fit_options, const NoiseWeights& noise) {
+                            const OutputErrorOptions& fit_options, const NoiseWeights& noise,
+                            bool coarse_to_fine) {
   OutputErrorOptions o = fit_options;
   o.noise = noise;
-  o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
+  if (!coarse_to_fine) o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
   OutputErrorResult refit = FitOutputError(vehicle, logs, o);
   if (!refit.usable && refit.scale_move_failed) {
     // Flight-only: the solve drifted along the scale line, out of the
@@ -418,16 +431,18 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
   // need not leave it (measured: an undeclared ground effect's k_ge stayed
   // at 0 while Cz sat at its bound): it starts at the library's typical
   // strength instead.
-  // A candidate blind at the bounds has no step to start from (its columns
-  // vanish there): it starts at absence, one-sided parameters at typical.
-  // Declared parameters at a bound restart at restart_values.
+  // A candidate whose refit restarts declared parameters at a bound
+  // (restart_values) has no step to start from: blind at the bounds, its
+  // columns vanish there; otherwise the step was taken at the distorted
+  // point. It starts at absence, one-sided parameters at typical.
+  const bool restarts = !score->restart_values.empty();
   const auto& specs = EffectLibrary()[EffectIndex(score->effect)].parameters;
   for (const auto& spec : specs) {
     const std::string name = score->effect + "." + spec.name;
     const auto it = score->linearised_estimates.find(name);
-    if (it == score->linearised_estimates.end() && !score->blind_at_bounds) continue;
+    if (it == score->linearised_estimates.end() && !restarts) continue;
     const Parameter& p = candidate.parameters.Get(name);
-    const double step = score->blind_at_bounds ? p.value : it->second;
+    const double step = restarts ? p.value : it->second;
     // A lag linearised beside absence (linearise_at) is one-sided too.
     const bool absent_at_lower = p.value == p.lower || std::isfinite(spec.linearise_at);
     const bool pinned_at_absence =
@@ -437,8 +452,12 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
   }
   for (const auto& [name, value] : score->restart_values) candidate.parameters.SetValue(name, value);
   // The other parameters start at the current fit, every declared one free
-  // (a bound the declared fit pressed one against may let go).
-  *refit = WarmRefit(candidate, logs, fit_options, pass.fit.noise);
+  // (a bound the declared fit pressed one against may let go). Restarted
+  // ones are far from it: the whole coarse-to-fine schedule (measured: an
+  // undeclared CG offset, d and Iyy restarted from their bounds, 1 s segments
+  // alone stopped at cg_offset = 0 and 7 x the declared fit's excess; the
+  // schedule finds the truth).
+  *refit = WarmRefit(candidate, logs, fit_options, pass.fit.noise, restarts);
   if (!refit->usable) {
     score->why_not_confirmed = "the joint refit failed: " + refit->why_not_usable;
     return false;

@@ -76,10 +76,11 @@ struct CandidateScore {
   // current fit left at a bound distorts channels it reaches only with that
   // parameter back inside (wind acts on u, v through Cx, Cy: with them at 0
   // its sensitivities there vanish and its linearised score says nothing).
-  // Its refit starts it at absence with those parameters at restart_values
-  // (their config values); its channels include the ones it reaches from
-  // there.
+  // Its channels include the ones it reaches from there.
   bool blind_at_bounds = false;
+  // Declared parameters at a bound whose channels the candidate reaches:
+  // its refit starts them at these (config) values, and the candidate at
+  // absence (one-sided parameters at typical).
   std::map<std::string, double> restart_values;
   // The refit (shortlisted candidates): joint refit, Wald test.
   bool refitted = false;
@@ -112,12 +113,14 @@ struct CandidateScore {
 // Whether any of `channels` is in `of`.
 bool ReachesAny(const std::vector<std::string>& channels, const std::vector<std::string>& of);
 
-// Marks the candidates blind at the bounds (CandidateScore::blind_at_bounds):
-// a declared parameter the current fit (`fitted`) left at a bound distorts
-// channels (`distorted`, per parameter) that the candidate reaches only with
-// that parameter back at its value in `declared` (the config). Sets their
-// restart_values and adds the channels they reach from there.
-void MarkBlindAtBounds(const Vehicle& fitted, const Vehicle& declared,
+// Which declared parameters the current fit (`fitted`) left at a bound each
+// candidate's refit restarts at its value in `declared` (the config)
+// (CandidateScore::restart_values): those distorting (`distorted`, channels
+// per parameter) a channel the candidate reaches. A candidate that reaches
+// such a channel only with the parameter back there is blind at the bounds
+// (CandidateScore::blind_at_bounds); the channels it reaches from there are
+// added to its own.
+void MarkRestartsAtBounds(const Vehicle& fitted, const Vehicle& declared,
                        const std::map<std::string, std::vector<std::string>>& distorted,
                        const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
                        std::vector<CandidateScore>* scores);
@@ -167,10 +170,14 @@ std::vector<std::string> ChannelsReachedBy(const Vehicle& vehicle,
 std::vector<std::string> ParametersAtBounds(const ParameterSet& parameters);
 
 // A fit of `vehicle` from its current values at the final segment length
-// and the given noise weights (a refit near a solution); with the scale held
-// in the solve when moving it onto the held member fails.
+// (a refit near a solution), or, coarse_to_fine, through the fit's whole
+// segment schedule (a refit with parameters restarted away from the current
+// fit: from there the final length alone stopped in a wrong minimum), with
+// the given noise weights; with the scale held in the solve when moving it
+// onto the held member fails.
 OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
-                            const OutputErrorOptions& fit_options, const NoiseWeights& noise);
+                            const OutputErrorOptions& fit_options, const NoiseWeights& noise,
+                            bool coarse_to_fine = false);
 
 // Refits `score.effect` jointly into the pass's model (starting at its
 // linearised estimates, noise weights of the current fit) and tests its

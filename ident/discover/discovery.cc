@@ -103,22 +103,73 @@ OutputErrorResult Converged(const Vehicle& model, OutputErrorResult fit,
   return fit;
 }
 
-// The candidates to refit (indices into scores): those that pass the
+// A declared fit that left parameters at a bound may sit in a wrong basin
+// rather than show a missing effect: the declared model refitted with those
+// parameters restarted at their config values (the others at the fit),
+// through the whole coarse-to-fine schedule, replaces it when its weighted
+// RSS (the fit's noise weights) is lower. Measured (swashplate bias truth,
+// low flight, flight only): sigma0 at its upper bound and Cy at 0; every
+// candidate refitted with sigma0 restarted "removed" 58-62 % of the excess
+// while its own parameters stayed insignificant: the restart, not the
+// effect. The candidates are then judged against the better declared fit.
+// The same holds for the model once an effect is added (measured, same
+// flight: with swashplate_bias added, sigma0 and Cy still at their bounds,
+// wind and rotor_drag refitted from their config values each "removed"
+// 96 %, wind was added): `model` is the current model, `declared` gives the
+// config values.
+OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declared,
+                                     OutputErrorResult fit, const std::vector<EstimationLog>& logs,
+                                     const OutputErrorOptions& fit_options,
+                                     const DiscoveryOptions& options, std::string* note) {
+  Vehicle restarted = model;
+  restarted.parameters = fit.parameters;
+  std::string names;
+  for (const std::string& name : ParametersAtBounds(fit.parameters)) {
+    if (!declared.parameters.Has(name)) continue;  // an added effect's parameter
+    const Parameter& p = fit.parameters.Get(name);
+    const double config = declared.parameters.Value(name);
+    if (!(config > p.lower && config < p.upper)) continue;
+    restarted.parameters.SetValue(name, config);
+    names += (names.empty() ? "" : ", ") + name;
+  }
+  if (names.empty()) return fit;
+  Say(options, "discover: the fit left " + names + " at a bound: refitting from their config values");
+  OutputErrorResult refit = WarmRefit(restarted, logs, fit_options, fit.noise, true);
+  if (!refit.usable) return fit;
+  int n = 0;
+  const double before = WeightedRss(logs, fit.predictions, fit.noise, &n);
+  const double after = WeightedRss(logs, refit.predictions, fit.noise, &n);
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "the fit restarted with %s at the config values: weighted RSS %.6g "
+                "against %.6g%s",
+                names.c_str(), after, before, after < before ? ": kept" : ": not kept");
+  Say(options, std::string("discover: ") + line);
+  if (!(after < before)) return fit;
+  *note = line;
+  return Converged(model, std::move(refit), logs, fit_options, options);
+}
+
+// The candidates to refit (indices into scores), none of `excluded` (removed
+// effects do not come back): at most max_refits of those that pass the
 // linearised test; then, if the current fit holds parameters at a bound
-// (step 7), those blind at the bounds (measured: an undeclared wind with Cx,
-// Cy pressed to 0, flight only, never refitted); then the testable ones
-// acting on a channel those parameters distort
-// (`symptom_channels`): the linearisation at a bound is a poor guide (measured: an
-// undeclared ground effect at 0.13-0.9 m, Cz pressed at its bound, predicted
-// to remove 2 % of the excess, 90 % at the refit); then the testable ones
-// predicted to remove at least half of min_share_of_excess. Largest
-// predicted share first within each group; at most max_refits.
+// (step 7), at most max_refits more, restarted off the bounds: first those
+// blind at the bounds (measured: an undeclared wind with Cx, Cy pressed to 0,
+// flight only, never refitted), then the testable ones acting on a channel
+// those parameters distort (`symptom_channels`): the linearisation at a bound
+// is a poor guide (measured: an undeclared ground effect at 0.13-0.9 m, Cz
+// pressed at its bound, predicted to remove 2 % of the excess, 90 % at the
+// refit; an undeclared CG offset with d and Iyy at bounds, never shortlisted
+// while three passing candidates filled the slots); then, up to max_refits in
+// all, the testable ones predicted to remove at least half of
+// min_share_of_excess. Largest predicted share first within each group.
 std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
                            const std::vector<std::string>& symptom_channels,
-                           const DiscoveryOptions& o) {
+                           const std::vector<std::string>& excluded, const DiscoveryOptions& o) {
   std::vector<int> passing, blind, symptomatic, promising;
   for (size_t k = 0; k < scores.size(); ++k) {
     const CandidateScore& s = scores[k];
+    if (std::find(excluded.begin(), excluded.end(), s.effect) != excluded.end()) continue;
     if (s.passes) {
       passing.push_back(static_cast<int>(k));
     } else if (s.blind_at_bounds) {
@@ -132,11 +183,16 @@ std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
   auto by_share = [&](int a, int b) { return scores[a].predicted_share > scores[b].predicted_share; };
   std::stable_sort(symptomatic.begin(), symptomatic.end(), by_share);
   std::stable_sort(promising.begin(), promising.end(), by_share);
-  std::vector<int> out = passing;
-  out.insert(out.end(), blind.begin(), blind.end());
-  out.insert(out.end(), symptomatic.begin(), symptomatic.end());
-  out.insert(out.end(), promising.begin(), promising.end());
-  if (static_cast<int>(out.size()) > o.max_refits) out.resize(o.max_refits);
+  auto take = [&](const std::vector<int>& group, size_t at_most, std::vector<int>* out) {
+    for (size_t i = 0; i < group.size() && i < at_most; ++i) out->push_back(group[i]);
+  };
+  const size_t max_refits = static_cast<size_t>(o.max_refits);
+  std::vector<int> out;
+  take(passing, max_refits, &out);
+  std::vector<int> at_bounds = blind;
+  at_bounds.insert(at_bounds.end(), symptomatic.begin(), symptomatic.end());
+  take(at_bounds, max_refits, &out);
+  take(promising, max_refits > out.size() ? max_refits - out.size() : 0, &out);
   return out;
 }
 
@@ -390,6 +446,10 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   }
   if (!fit.usable) throw ComputationError("the declared model's fit failed: " + fit.why_not_usable);
   fit = Converged(declared, std::move(fit), estimation, o.fit, options);
+  std::string restart_note;
+  fit = RestartedOffBounds(declared, declared, std::move(fit), estimation, o.fit, options,
+                           &restart_note);
+  if (!restart_note.empty()) out.start += "; " + restart_note;
   Vehicle current = declared;
   current.parameters = fit.parameters;
   out.baseline = Snapshot(current, fit, estimation, validation, options);
@@ -431,26 +491,20 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         distorted[name] = ChannelsReachedBy(pass.fitted, {name}, estimation, pass.fit.noise);
         for (const std::string& c : distorted[name]) symptom_channels.push_back(c);
       }
-      MarkBlindAtBounds(pass.fitted, declared, distorted, estimation, pass.fit.noise, &scores);
-      std::vector<int> shortlist = Shortlist(scores, symptom_channels, options);
-      // A removed effect does not come back (no cycling).
-      shortlist.erase(
-          std::remove_if(shortlist.begin(), shortlist.end(),
-                         [&](int k) {
-                           return std::any_of(out.removed.begin(), out.removed.end(),
-                                              [&](const RemovedEffect& r) {
-                                                return r.effect == scores[k].effect;
-                                              });
-                         }),
-          shortlist.end());
+      MarkRestartsAtBounds(pass.fitted, declared, distorted, estimation, pass.fit.noise, &scores);
+      std::vector<std::string> removed;  // a removed effect does not come back (no cycling)
+      for (const RemovedEffect& r : out.removed) removed.push_back(r.effect);
+      const std::vector<int> shortlist = Shortlist(scores, symptom_channels, removed, options);
       for (int k : shortlist) {
         const CandidateScore& s = scores[k];
         if (s.restart_values.empty()) continue;
         std::string names;
         for (const auto& [name, value] : s.restart_values) names += (names.empty() ? "" : ", ") + name;
-        Say(options, "  " + s.effect + " reaches the channels " + names +
-                         " distort only off their bounds: its refit restarts them at the config "
-                         "values");
+        Say(options, "  " + s.effect +
+                         (s.blind_at_bounds ? " reaches the channels " + names +
+                                                  " distort only off their bounds"
+                                            : " acts on channels that " + names + " distort") +
+                         ": its refit restarts them at the config values");
       }
       std::vector<CandidateRefit> refits = RefitInParallel(pass, estimation, validation, now,
                                                            shortlist, &scores, o, start);
@@ -475,6 +529,15 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
           v.parameters = fit.parameters;
           pass = LinearisePass(v, fit, estimation, o.fit);
           now = Snapshot(v, fit, estimation, validation, options);
+        }
+        std::string restart_note;
+        OutputErrorResult restarted = RestartedOffBounds(pass.fitted, declared, pass.fit, estimation,
+                                                         o.fit, options, &restart_note);
+        if (!restart_note.empty()) {
+          Vehicle v = pass.fitted;
+          v.parameters = restarted.parameters;
+          pass = LinearisePass(v, restarted, estimation, o.fit);
+          now = Snapshot(v, restarted, estimation, validation, options);
         }
         out.added.push_back(s.effect);
         accepted = true;

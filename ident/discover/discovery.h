@@ -51,10 +51,12 @@ struct DiscoveryOptions {
   // is a ratio of two small numbers (measured: a cg_offset "removing 830 %"
   // of an excess of almost nothing, 0 % held out).
   double min_channels_excess = 0.1;
-  // Candidates refitted per round: those that pass the linearised test and
-  // those predicted to remove at least half of min_share_of_excess, largest
-  // predicted drop first, at most this many (side by side on at most
-  // fit.num_threads threads: more refits than cores only slow each down).
+  // Candidates refitted per round: at most this many that pass the
+  // linearised test, and those predicted to remove at least half of
+  // min_share_of_excess; when the current fit holds parameters at a bound, at
+  // most this many more acting on the channels they distort (restarted off
+  // the bounds). Largest predicted drop first, side by side on at most
+  // fit.num_threads threads (more refits than cores only slow each down).
   int max_refits = 3;
   // With a flight log, start the declared fit from a short EKF pass at the
   // final segment length (ident/ekf/ekf_start.h) instead of the config's

@@ -1,10 +1,11 @@
 // Candidates blind at the bounds (ident/discover/candidate_scores.h,
-// MarkBlindAtBounds) on a short simulated flight: with the body drag Cx, Cy
+// MarkRestartsAtBounds) on a short simulated flight: with the body drag Cx, Cy
 // pressed to their lower bound 0, a wind reaches u and v only through them,
 // so its linearised score there says nothing (issue 13: an undeclared wind
 // never refitted); the loop restarts Cx, Cy at their config values for its
-// refit. Candidates that reach u, v directly, or nothing the bound distorts,
-// are left alone.
+// refit. A candidate that reaches u, v at the bound is restarted there too
+// (its step at the bound starts it in the declared fit's basin); one that
+// reaches nothing the bound distorts is left alone.
 #include <algorithm>
 #include <map>
 #include <string>
@@ -23,7 +24,7 @@ bool Has(const std::vector<std::string>& v, const std::string& x) {
   return std::find(v.begin(), v.end(), x) != v.end();
 }
 
-TEST(BlindAtBounds, WindIsBlindWhileTheBodyDragSitsAtItsBound) {
+TEST(RestartsAtBounds, WindIsBlindWhileTheBodyDragSitsAtItsBound) {
   const Vehicle declared = Nominal();
   FlightScenario f = ShippedFlightScenario().flight;
   f.duration_s = 6;
@@ -40,13 +41,15 @@ TEST(BlindAtBounds, WindIsBlindWhileTheBodyDragSitsAtItsBound) {
   for (const char* effect : {"wind", "rotor_drag", "gyroscopic"}) {
     CandidateScore s;
     s.effect = effect;
+    s.testable = true;
     s.channels = ChannelsReachedBy(CandidateVehicle(fitted, effect), EffectParameterNames(effect),
                                    logs, noise);
     scores.push_back(s);
   }
   // At the bound the wind does not reach u or v (the premise).
   ASSERT_FALSE(Has(scores[0].channels, "u") || Has(scores[0].channels, "v"));
-  MarkBlindAtBounds(fitted, declared, distorted, logs, noise, &scores);
+  ASSERT_TRUE(Has(scores[1].channels, "u") && Has(scores[1].channels, "v"));
+  MarkRestartsAtBounds(fitted, declared, distorted, logs, noise, &scores);
 
   const CandidateScore& wind = scores[0];
   EXPECT_TRUE(wind.blind_at_bounds);
@@ -54,10 +57,10 @@ TEST(BlindAtBounds, WindIsBlindWhileTheBodyDragSitsAtItsBound) {
   EXPECT_EQ(wind.restart_values.at("Cx"), declared.parameters.Value("Cx"));
   EXPECT_EQ(wind.restart_values.at("Cy"), declared.parameters.Value("Cy"));
   EXPECT_TRUE(Has(wind.channels, "u") && Has(wind.channels, "v"));
-  // rotor_drag reaches u, v at the bound already; gyroscopic moments do not
-  // depend on the body drag.
+  // rotor_drag reaches u, v at the bound already: not blind, restarted;
+  // gyroscopic moments do not depend on the body drag.
   EXPECT_FALSE(scores[1].blind_at_bounds);
-  EXPECT_TRUE(scores[1].restart_values.empty());
+  EXPECT_EQ(scores[1].restart_values.size(), 2u);
   EXPECT_FALSE(scores[2].blind_at_bounds);
   EXPECT_TRUE(scores[2].restart_values.empty());
 }
