@@ -59,7 +59,8 @@
 // Optional Rauch-Tung-Striebel smoother (rts_smoother.h) over the whole chain
 // in the last pass: smoothed states at every row. (The parameters' smoothed
 // values equal the final filtered ones up to their random walk: they are not
-// kept.)
+// kept.) Its store comes from checkpoints of the filter and recomputation
+// (ekf/pass.h), so its memory grows with sqrt(rows), not with the rows.
 //
 // Cost (bench/ident/ekf/ekf_bench.cc, 60 s at 200 Hz, 12 unknowns augmented): per
 // 5 ms row ~14 us propagation (CVODE restarted at the input change, ~5
@@ -138,6 +139,13 @@ struct EkfOptions {
   // flight), which makes every std too large and the NIS too small.
   int noise_adaptations = 0;
   bool smoother = true;
+  // Rows per block of the smoother's checkpoints (ekf/pass.h): the forward
+  // pass keeps the filter state every this many rows and the backward pass
+  // recomputes one block at a time. 0: about sqrt(rows), at least 256 (memory
+  // O(sqrt(rows)), one more forward pass in time); at least the rows: the
+  // whole store in memory, nothing recomputed. The smoothed states are the
+  // same either way.
+  long smoother_block_rows = 0;
 
   // ident/scale_gauge.h. A parameter with initial_parameter_std_by_name is a
   // prior: on a member of the scale group it fixes the scale.
