@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 
 #include <Eigen/Cholesky>
 #include <glog/logging.h>
@@ -12,6 +13,7 @@
 #include "core/errors.h"
 #include "core/report_values.h"
 #include "dynamics/outputs.h"
+#include "ident/ekf/history_sink.h"
 #include "ident/ekf/pass.h"
 #include "ident/free_parameters.h"
 
@@ -120,7 +122,8 @@ bool EkfOptions::IsValid(std::string* why) const {
 
 
 EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
-                 const NoiseWeights& noise, const EkfOptions& options) {
+                 const NoiseWeights& noise, const EkfOptions& options,
+                 EkfHistorySink* history) {
   const Clock::time_point start = Clock::now();
   std::string why;
   if (!options.IsValid(&why)) throw InputError("EKF options: " + why);
@@ -201,31 +204,12 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   const int passes = (covariance_pass ? 2 : 1) + options.noise_adaptations;
   problem.total_rows = rows_per_pass * passes;
 
-  // Histories.
-  result.logs.resize(logs.size());
-  for (size_t L = 0; L < logs.size(); ++L) {
-    const EstimationLog& log = logs[L];
-    EkfLogHistory& h = result.logs[L];
-    const int N = log.NumRows(), m = log.NumChannels();
-    h.source = log.source;
-    h.name = log.name;
-    h.times = log.inputs.times();
-    h.channels = log.channels;
-    h.channel_names = log.channel_names;
-    h.measured = log.values;
-    h.states.setConstant(N, kNumStates, kNaN);
-    h.state_std.setConstant(N, kNumStates, kNaN);
-    if (options.smoother) {
-      h.smoothed_states.setConstant(N, kNumStates, kNaN);
-      h.smoothed_state_std.setConstant(N, kNumStates, kNaN);
-    }
-    h.parameters.setConstant(N, np, kNaN);
-    h.parameter_std.setConstant(N, np, kNaN);
-    if (covariance_pass) h.parameter_std_at_estimate.setConstant(N, np, kNaN);
-    h.innovations.setConstant(N, m, kNaN);
-    h.innovation_std.setConstant(N, m, kNaN);
-    h.nis.assign(N, kNaN);
-    h.nis_dof.assign(N, 0);
+  // Histories: in result.logs unless the caller takes them.
+  std::unique_ptr<EkfMemoryHistory> in_memory;
+  if (history == nullptr) {
+    in_memory = std::make_unique<EkfMemoryHistory>(logs, np, options.smoother, covariance_pass,
+                                                   &result.logs);
+    history = in_memory.get();
   }
 
   long rows_done = 0;
@@ -253,11 +237,11 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   // Pass 1: estimation; with noise adaptation, first the passes that
   // re-estimate R from their innovations.
   result.noise_initial = noise;
-  PassRecord record1;
+  EkfPassRecord record1;
   record1.parameters = true;
   record1.innovations = true;
   for (int a = 0; a < options.noise_adaptations; ++a) {
-    const PassResult pass = RunPass(problem, p0, false, false, record1, &result.logs, &rows_done);
+    const PassResult pass = RunPass(problem, p0, false, false, record1, history, &rows_done);
     if (!pass.ok) return failed(pass);
     add_effort(pass);
     // Mehra (1970): E[nu nu^T] = H P H^T + R, so R_ii = mean(nu_i^2 - (H P H^T)_ii)
@@ -273,7 +257,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   record1.states = !covariance_pass;
   const Clock::time_point c1 = Clock::now();
   const PassResult pass1 = RunPass(problem, p0, false, options.smoother && !covariance_pass,
-                                   record1, &result.logs, &rows_done);
+                                   record1, history, &rows_done);
   result.estimation_pass_s = Seconds(c1, Clock::now());
   if (!pass1.ok) return failed(pass1);
   add_effort(pass1);
@@ -286,7 +270,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
 
   // Pass 2: covariance at the estimate (and the reported states).
   if (covariance_pass) {
-    PassRecord record2;
+    EkfPassRecord record2;
     record2.states = true;
     record2.std_at_estimate = true;
     Vehicle at_estimate = anchored;
@@ -295,7 +279,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
                            problem.qp, problem.prior, problem.qx, problem.total_rows};
     const Clock::time_point c2 = Clock::now();
     const PassResult pass2 =
-        RunPass(problem2, p_final, true, options.smoother, record2, &result.logs, &rows_done);
+        RunPass(problem2, p_final, true, options.smoother, record2, history, &rows_done);
     result.covariance_pass_s = Seconds(c2, Clock::now());
     if (!pass2.ok) return failed(pass2);
     add_effort(pass2);
@@ -395,17 +379,17 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
 
   // Convergence: time after which each recursive estimate stays within 3 final std.
   result.settled_after_s.assign(np, 0.0);
-  double offset = 0;
-  for (const EkfLogHistory& h : result.logs) {
+  std::vector<double> offsets(logs.size(), 0.0);  // of each log's start in the chain
+  for (size_t L = 1; L < logs.size(); ++L) {
+    offsets[L] = offsets[L - 1] + logs[L - 1].inputs.times().back() - logs[L - 1].inputs.time(0);
+  }
+  history->VisitParameters([&](int L, int row, const EkfRowValues& p) {
     for (int k = 0; k < np; ++k) {
-      for (size_t row = 0; row < h.times.size(); ++row) {
-        if (std::fabs(h.parameters(row, k) - result.estimate[k]) > 3 * result.estimate_std[k]) {
-          result.settled_after_s[k] = offset + h.times[row] - h.times[0];
-        }
+      if (std::fabs(p[k] - result.estimate[k]) > 3 * result.estimate_std[k]) {
+        result.settled_after_s[k] = offsets[L] + logs[L].inputs.time(row) - logs[L].inputs.time(0);
       }
     }
-    offset += h.times.back() - h.times.front();
-  }
+  });
 
   result.total_s = Seconds(start, Clock::now());
   result.usable = true;

@@ -287,12 +287,17 @@ struct EkfResult {
   Integrator::Stats integrator;
 };
 
+class EkfHistorySink;  // ekf/history_sink.h
+
 // Runs the filter (and smoother) over flight logs in order. vehicle: model
 // and parameters (values = initial estimates, `estimated` = which are
 // augmented). noise: measurement noise std of every channel the logs hold.
-// Throws InputError if options are invalid, a log is not a flight log, or a
-// channel has no noise level; numerical failures give usable = false.
+// history: where the per-row records go (null: EkfResult::logs; otherwise
+// logs stays empty). Throws InputError if options are invalid, a log is not
+// a flight log, or a channel has no noise level; numerical failures give
+// usable = false.
 EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
-                 const NoiseWeights& noise, const EkfOptions& options);
+                 const NoiseWeights& noise, const EkfOptions& options,
+                 EkfHistorySink* history = nullptr);
 
 }  // namespace coaxid

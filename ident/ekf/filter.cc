@@ -168,7 +168,7 @@ bool EkfFilter::Predict(int L, int k) {
   return true;
 }
 
-bool EkfFilter::Update(EkfTally* tally, EkfLogHistory* innovations) {
+bool EkfFilter::Update(EkfTally* tally) {
   const EkfOptions& options = pb_.options;
   const int L = s_.log, k = row_;
   const EstimationLog& log = pb_.logs[L];
@@ -179,6 +179,7 @@ bool EkfFilter::Update(EkfTally* tally, EkfLogHistory* innovations) {
   z.swap(z_pred_);
   P.swap(P_pred_);
   s_.row = k;
+  present_.clear();
   if (k == 0) {
     s_.step_hint = propagator_.step_hint();
     return true;
@@ -210,7 +211,7 @@ bool EkfFilter::Update(EkfTally* tally, EkfLogHistory* innovations) {
       return Fail(t1, L, k, "output model not finite (state or parameters blown up)");
     }
   }
-  const bool record = tally != nullptr && innovations != nullptr;
+  const bool record = tally != nullptr && tally->innovations;
   if (gating_) {  // the gate on each sample's own S_jj = (H P H^T)_jj + R_jj
     size_t kept = 0;
     for (const int c : present_) {
@@ -282,6 +283,7 @@ bool EkfFilter::Update(EkfTally* tally, EkfLogHistory* innovations) {
     }
     K_ = llt_.solve(HP_).transpose();  // n x m
     const double nis = llt_.matrixL().solve(nu_).squaredNorm();
+    nis_ = nis;
     if (freeze_) {
       z.head<kNumStates>().noalias() += K_.topRows<kNumStates>() * nu_;
     } else {
@@ -308,15 +310,10 @@ bool EkfFilter::Update(EkfTally* tally, EkfLogHistory* innovations) {
     }
     if (tally != nullptr) ++tally->updates;
     if (record) {
-      EkfLogHistory& h = *innovations;
       tally->log_likelihood -= 0.5 * (nis + 2 * llt_.matrixLLT().diagonal().array().log().sum() +
                                       m * std::log(2 * M_PI));
-      h.nis[k] = nis;
-      h.nis_dof[k] = m;
       const bool counted = t1 - log.inputs.time(0) >= options.nis_burn_in_s;
       for (int j = 0; j < m; ++j) {
-        h.innovations(k, present_[j]) = nu_[j];
-        h.innovation_std(k, present_[j]) = std::sqrt(S_(j, j));
         if (counted) {
           ChannelAccumulator& a = tally->channel_stats[log.channel_names[present_[j]]];
           a.nis += nu_[j] * nu_[j] / S_(j, j);

@@ -49,6 +49,7 @@ struct ChannelAccumulator {
 
 // What the updates of a pass count. Rows the smoother recomputes count nothing.
 struct EkfTally {
+  bool innovations = false;  // count the innovation statistics and gate rejections too
   std::map<std::string, ChannelAccumulator> channel_stats;
   std::map<std::string, long> rejected;  // innovation gate: samples rejected per channel
   double total_nis = 0, log_likelihood = 0;
@@ -88,9 +89,14 @@ class EkfFilter {
   // set (hot numeric code).
   bool Predict(int log, int row);
   // The update with the channels the row holds (nothing at row 0). tally:
-  // where to count the update (null: count nothing); innovations: where to
-  // record the innovations and the statistics with them (null: not).
-  bool Update(EkfTally* tally, EkfLogHistory* innovations);
+  // where to count it (null: count nothing).
+  bool Update(EkfTally* tally);
+  // The last Update()'s innovations: the log's columns that took part (none:
+  // no update), nu, S_jj and the NIS.
+  const std::vector<int>& updated_columns() const { return present_; }
+  const Eigen::VectorXd& innovations() const { return nu_; }
+  Eigen::VectorXd InnovationStd() const { return S_.diagonal().cwiseSqrt(); }
+  double nis() const { return nis_; }
 
   const EkfFilterState& state() const { return s_; }
   void Restore(const EkfFilterState& state);
@@ -130,6 +136,7 @@ class EkfFilter {
   Eigen::Matrix<double, kNumFlightChannels, Eigen::Dynamic> H_model_;
   Eigen::LLT<Eigen::MatrixXd> llt_;
   std::vector<int> present_;  // columns of the log measured (and passing the gate) in this row
+  double nis_ = 0;
 
   std::string failure_;
   double failure_time_ = 0;

@@ -44,13 +44,15 @@ long SmootherBlockRows(long rows, long option) {
 }
 
 PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool freeze,
-                   bool smooth, const PassRecord& rec, std::vector<EkfLogHistory>* histories,
+                   bool smooth, const EkfPassRecord& rec, EkfHistorySink* history,
                    long* rows_done) {
   const EkfOptions& options = pb.options;
   const int np = pb.free.size();
   const int n = kNumStates + np;
   const Eigen::VectorXd& scales = pb.free.scales();
   PassResult out;
+  out.innovations = rec.innovations;
+  history->BeginPass(rec);
   EkfFilter filter(pb, p_start, freeze);
   auto fail = [&]() {
     out.ok = false;
@@ -87,21 +89,23 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
   for (size_t L = 0; L < pb.logs.size(); ++L) {
     const EstimationLog& log = pb.logs[L];
     const int N = log.NumRows();
-    EkfLogHistory& h = (*histories)[L];
     auto record = [&](int row) {
+      const int l = static_cast<int>(L);
       const Eigen::VectorXd& z = filter.state().z;
       const Eigen::MatrixXd& P = filter.state().P;
+      if (rec.innovations && !filter.updated_columns().empty()) {
+        history->Innovations(l, row, filter.updated_columns(), filter.innovations(),
+                             filter.InnovationStd(), filter.nis(),
+                             static_cast<int>(filter.updated_columns().size()));
+      }
       if (rec.states) {
-        h.states.row(row) = z.head<kNumStates>().transpose();
-        h.state_std.row(row) = P.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt().transpose();
+        history->FilteredStates(l, row, z.head<kNumStates>(),
+                                P.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt());
       }
       if (np == 0) return;
       const Eigen::VectorXd p_std = P.diagonal().tail(np).cwiseMax(0.0).cwiseSqrt().cwiseProduct(scales);
-      if (rec.parameters) {
-        h.parameters.row(row) = z.tail(np).cwiseProduct(scales).transpose();
-        h.parameter_std.row(row) = p_std.transpose();
-      }
-      if (rec.std_at_estimate) h.parameter_std_at_estimate.row(row) = p_std.transpose();
+      if (rec.parameters) history->Parameters(l, row, z.tail(np).cwiseProduct(scales), p_std);
+      if (rec.std_at_estimate) history->ParameterStdAtEstimate(l, row, p_std);
     };
     for (int k = 0; k < N; ++k, ++step) {
       const Clock::time_point c0 = Clock::now();
@@ -114,7 +118,7 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
       }
       const Clock::time_point c2 = Clock::now();
       out.smoother_s += Seconds(c1, c2);
-      if (!filter.Update(&out, rec.innovations ? &h : nullptr)) return fail();
+      if (!filter.Update(&out)) return fail();
       out.update_s += Seconds(c2, Clock::now());
       if (smooth && step % block == 0 && step <= last_block_start) {
         checkpoints.push_back(filter.state());
@@ -155,7 +159,7 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
         for (long j = 1; j <= count; ++j) {
           const auto [L, row] = rows[j];
           if (!filter.Predict(L, row) || !add_transition(L, row) ||
-              !filter.Update(nullptr, nullptr)) {
+              !filter.Update(nullptr)) {
             return fail();
           }
         }
@@ -173,10 +177,8 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
           P_next = Ps;
         }
         const auto [L, row] = rows[j];
-        EkfLogHistory& h = (*histories)[L];
-        h.smoothed_states.row(row) = xs.head<kNumStates>().transpose();
-        h.smoothed_state_std.row(row) =
-            Ps.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt().transpose();
+        history->SmoothedStates(L, row, xs.head<kNumStates>(),
+                                Ps.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt());
       });
     }
     out.smoother_s += Seconds(c0, Clock::now());

@@ -27,16 +27,9 @@
 
 #include "ident/ekf/ekf.h"
 #include "ident/ekf/filter.h"
+#include "ident/ekf/history_sink.h"
 
 namespace coaxid {
-
-// What a pass records in the histories.
-struct PassRecord {
-  bool states = false;           // states (and smoothed ones when smoothing)
-  bool parameters = false;       // the recursive parameter estimates
-  bool std_at_estimate = false;  // the covariance pass's parameter std
-  bool innovations = false;      // innovations, NIS statistics, log-likelihood
-};
 
 struct PassResult : EkfTally {
   bool ok = true;
@@ -51,10 +44,11 @@ struct PassResult : EkfTally {
 
 // One pass of the filter over every log, from parameters p_start (scaled)
 // with the prior covariance. freeze: keep the parameters' mean (covariance
-// pass). smooth: run the RTS smoother at the end. rows_done counts rows for
-// the progress report.
+// pass). smooth: run the RTS smoother at the end. record: what goes to
+// history (and, with innovations, which statistics the pass counts).
+// rows_done counts rows for the progress report.
 PassResult RunPass(const EkfProblem& problem, const Eigen::VectorXd& p_start, bool freeze,
-                   bool smooth, const PassRecord& record, std::vector<EkfLogHistory>* histories,
+                   bool smooth, const EkfPassRecord& record, EkfHistorySink* history,
                    long* rows_done);
 
 // The rows per smoother block: EkfOptions::smoother_block_rows, or (0) about
