@@ -214,6 +214,9 @@ double InnovationGateThreshold(double probability);
 
 struct EkfLogHistory {
   std::string source, name;
+  // The log rows held, when this is a thinned copy (the plots of a long log,
+  // ekf/history_files.h); empty: every row.
+  std::vector<int> rows;
   std::vector<double> times;
   std::vector<int> channels;               // FlightChannel of each measured column
   std::vector<std::string> channel_names;
