@@ -66,8 +66,14 @@
 // 5 ms row ~14 us propagation (CVODE restarted at the input change, ~5
 // steps; one autodiff Jacobian; the exponential series) and ~8 us update
 // (autodiff of the accelerometer, Cholesky, Joseph form), per pass; the
-// smoother ~15 us per row. The variational-equation transition costs ~35 us
-// per row instead of 14.
+// smoother ~15 us per row, plus the recomputation of every block but the
+// last (about one more pass of the filter: ekf/pass.h). The
+// variational-equation transition costs ~35 us per row instead of 14.
+//
+// Memory: the filter and its smoother O(sqrt(rows)) (ekf/pass.h); the
+// per-row records go to an EkfHistorySink (ekf/history_sink.h), by default
+// EkfResult::logs (~1 kB a row), or streamed to files (ekf/history_files.h:
+// what `coaxid identify --method=ekf` does).
 //
 // Failures (CVODE, a covariance that is not positive definite, non-finite
 // values, or divergence: the normalised innovation squared per degree of
