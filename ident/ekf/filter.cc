@@ -12,9 +12,7 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-bool IsAngleChannel(int channel) {
-  return channel == kPhi || channel == kTheta || channel == kPsi;
-}
+bool IsAngleChannel(int channel) { return channel == kPhi || channel == kTheta || channel == kPsi; }
 
 // To (-pi, pi].
 double WrapAngle(double a) { return a - 2 * M_PI * std::floor((a + M_PI) / (2 * M_PI)); }
@@ -40,10 +38,9 @@ EkfFilter::EkfFilter(const EkfProblem& problem, const Eigen::VectorXd& p_start, 
       freeze_(freeze),
       np_(problem.free.size()),
       n_(kNumStates + problem.free.size()),
-      propagator_(problem.vehicle.model, PropagatorTheta(problem, p_start),
-                  problem.free.indices(), problem.free.scales(), problem.qx, problem.qp,
-                  problem.options.transition, problem.options.integrator,
-                  problem.options.max_substep_s),
+      propagator_(problem.vehicle.model, PropagatorTheta(problem, p_start), problem.free.indices(),
+                  problem.free.scales(), problem.qx, problem.qp, problem.options.transition,
+                  problem.options.integrator, problem.options.max_substep_s),
       // A state channel's row of H is a unit vector unless a measurement effect
       // (a gyro bias) sits between the state and the log.
       states_are_logged_(!problem.vehicle.model.ChangesFlightMeasurements()),
@@ -109,8 +106,8 @@ bool EkfFilter::Predict(int L, int k) {
         P_pred_(i, i) = R_[col];
       } else {
         z_pred_[i] = 0;
-        const double s = i <= kZ ? options.initial_position_std
-                         : i <= kW ? options.initial_velocity_std
+        const double s = i <= kZ     ? options.initial_position_std
+                         : i <= kW   ? options.initial_velocity_std
                          : i <= kPsi ? options.initial_angle_std
                                      : options.initial_rate_std;
         P_pred_(i, i) = s * s;

@@ -9,14 +9,13 @@
 // Internal to ident/ekf: ekf.cc and pass.cc use it.
 #pragma once
 
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
 #include <deque>
 #include <map>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Cholesky>
-#include <Eigen/Core>
 
 #include "dynamics/held_input.h"
 #include "dynamics/vehicle.h"
@@ -119,8 +118,8 @@ class EkfFilter {
   const int np_, n_;
   EkfPropagator propagator_;
   EkfFilterState s_;
-  int row_ = 0;             // the row Predict() moved to
-  Eigen::VectorXd R_;       // measurement noise variance of the current log's columns
+  int row_ = 0;        // the row Predict() moved to
+  Eigen::VectorXd R_;  // measurement noise variance of the current log's columns
   const bool states_are_logged_;
   const bool gating_;
   const double gate_;

@@ -39,8 +39,7 @@ std::string EkfStatesCsvHeader(bool smoothed) {
 }
 
 void AppendEkfStatesCsvRow(const std::string& log, double t, const double* x, const double* std,
-                           const double* smoothed_x, const double* smoothed_std,
-                           std::string* out) {
+                           const double* smoothed_x, const double* smoothed_std, std::string* out) {
   *out += log + "," + Csv(t);
   for (int i = 0; i < kNumStates; ++i) *out += "," + Csv(x[i]) + "," + Csv(std[i]);
   if (smoothed_x != nullptr) {
@@ -61,8 +60,7 @@ std::string EkfParametersCsvHeader(const std::vector<std::string>& free_names, b
 }
 
 void AppendEkfParametersCsvRow(const std::string& log, double t, int np, const double* value,
-                               const double* std, const double* std_at_estimate,
-                               std::string* out) {
+                               const double* std, const double* std_at_estimate, std::string* out) {
   *out += log + "," + Csv(t);
   for (int j = 0; j < np; ++j) {
     *out += "," + Csv(value[j]) + "," + Csv(std[j]);

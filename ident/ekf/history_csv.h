@@ -17,16 +17,14 @@ std::string EkfCsvLogName(const std::string& name);
 std::string EkfStatesCsvHeader(bool smoothed);
 // x, std: 12 each; smoothed_x, smoothed_std: 12 each, or null (no smoother).
 void AppendEkfStatesCsvRow(const std::string& log, double t, const double* x, const double* std,
-                           const double* smoothed_x, const double* smoothed_std,
-                           std::string* out);
+                           const double* smoothed_x, const double* smoothed_std, std::string* out);
 
 // parameters.csv: log, t, then per free parameter the recursive estimate, its
 // filter std, and the covariance pass's std at the final estimate.
 std::string EkfParametersCsvHeader(const std::vector<std::string>& free_names, bool at_estimate);
 // value, std, std_at_estimate: np each (std_at_estimate null without the covariance pass).
 void AppendEkfParametersCsvRow(const std::string& log, double t, int np, const double* value,
-                               const double* std, const double* std_at_estimate,
-                               std::string* out);
+                               const double* std, const double* std_at_estimate, std::string* out);
 
 // innovations.csv: log, t, per channel the innovation and sqrt(S_ii), then
 // the row's NIS and its degrees of freedom. The channels: those of every log,

@@ -26,8 +26,8 @@ class EkfHistoryFiles::Scratch {
     path.push_back('\0');
     const int fd = mkstemp(path.data());
     if (fd < 0) {
-      throw InputError("cannot make a scratch file in " + folder + " for the EKF's " + what +
-                       ": " + std::strerror(errno));
+      throw InputError("cannot make a scratch file in " + folder + " for the EKF's " + what + ": " +
+                       std::strerror(errno));
     }
     unlink(path.data());  // gone with the process, whatever happens
     file_ = fdopen(fd, "w+b");
@@ -78,10 +78,7 @@ class EkfHistoryFiles::Scratch {
 EkfHistoryFiles::EkfHistoryFiles(const std::vector<EstimationLog>& logs, bool smoother,
                                  const std::string& folder,
                                  const std::vector<std::vector<int>>& keep_states_at)
-    : logs_(logs),
-      smoother_(smoother),
-      folder_(folder),
-      states_at_rows_(keep_states_at) {
+    : logs_(logs), smoother_(smoother), folder_(folder), states_at_rows_(keep_states_at) {
   for (const EstimationLog& log : logs_) {
     offsets_.push_back(rows_);
     rows_ += log.NumRows();
@@ -240,8 +237,8 @@ void EkfHistoryFiles::PadInnovations(long end) {
 }
 
 void EkfHistoryFiles::Innovations(int log, int row, const std::vector<int>& columns,
-                                  const Eigen::VectorXd& nu, const Eigen::VectorXd& std,
-                                  double nis, int dof) {
+                                  const Eigen::VectorXd& nu, const Eigen::VectorXd& std, double nis,
+                                  int dof) {
   PadInnovations(GlobalRow(log, row));
   const int m = logs_[log].NumChannels();
   std::vector<double> record(2 * m + 2, kNaN);
@@ -311,8 +308,7 @@ void EkfHistoryFiles::ParametersCsv(const std::vector<std::string>& free_names,
     for (int row = 0; row < log.NumRows(); ++row) {
       parameters_->Read(record.data(), record.size());
       if (covariance_pass) std_at_estimate_->Read(at_estimate.data(), at_estimate.size());
-      AppendEkfParametersCsvRow(name, log.inputs.time(row), np_, record.data(),
-                                record.data() + np_,
+      AppendEkfParametersCsvRow(name, log.inputs.time(row), np_, record.data(), record.data() + np_,
                                 covariance_pass ? at_estimate.data() : nullptr, &pieces.text);
       pieces.EndOfRow();
     }

@@ -1,12 +1,12 @@
 // The EKF's per-row records streamed to scratch files (issue 15), for the
 // CSV tables of long logs: memory independent of the log length.
 //
-// Each quantity goes to its own binary scratch file in the output folder,
-// unlinked as soon as it is opened (nothing is left behind if the run
-// fails): the filtered states, the parameters and their std, the std at the
-// estimate, row by row in order; the smoothed states block by block at their
-// rows' places; the innovations one file per recording pass (a noise
-// adaptation pass and the estimation pass), merged as the in-memory history
+// Each quantity goes to its own binary scratch file in a given folder (the
+// CLI: the temporary folder, $TMPDIR or /tmp), unlinked as soon as it is
+// opened (nothing is left behind if the run fails): the filtered states,
+// the parameters and their std, the std at the estimate, row by row in
+// order; the smoothed states block by block at their rows' places; the innovations one file per
+// recording pass (a noise adaptation pass and the estimation pass), merged as the in-memory history
 // merges them (a later pass's value where it wrote one). The CSV tables are
 // written from them at the end (history_csv.h: the same bytes as report.h's
 // writers over EkfResult::logs), each through WriteFileAtomically.
@@ -33,8 +33,7 @@ class EkfHistoryFiles : public EkfHistorySink {
   // RunEkf smooths (EkfOptions::smoother); folder: where the scratch files
   // go; keep_states_at[L]: rows of log L whose states to keep
   // (EkfStatesAtRows). Throws InputError if the scratch files cannot be made.
-  EkfHistoryFiles(const std::vector<EstimationLog>& logs, bool smoother,
-                  const std::string& folder,
+  EkfHistoryFiles(const std::vector<EstimationLog>& logs, bool smoother, const std::string& folder,
                   const std::vector<std::vector<int>>& keep_states_at);
   ~EkfHistoryFiles() override;
 
@@ -55,8 +54,7 @@ class EkfHistoryFiles : public EkfHistorySink {
   void ParameterStdAtEstimate(int log, int row, const EkfRowValues& std) override;
   void Innovations(int log, int row, const std::vector<int>& columns, const Eigen::VectorXd& nu,
                    const Eigen::VectorXd& std, double nis, int dof) override;
-  void VisitParameters(
-      const std::function<void(int, int, const EkfRowValues&)>& visit) override;
+  void VisitParameters(const std::function<void(int, int, const EkfRowValues&)>& visit) override;
 
  private:
   // A binary scratch file of doubles, unlinked once open.
@@ -76,12 +74,12 @@ class EkfHistoryFiles : public EkfHistorySink {
   const std::vector<EstimationLog>& logs_;
   const bool smoother_;
   const std::string folder_;
-  int np_ = -1;  // from the first parameter rows
-  std::vector<long> offsets_;   // global row of each log's row 0
+  int np_ = -1;                // from the first parameter rows
+  std::vector<long> offsets_;  // global row of each log's row 0
   long rows_ = 0;
   std::unique_ptr<Scratch> filtered_, smoothed_, parameters_, std_at_estimate_;
   std::vector<std::unique_ptr<Scratch>> innovations_;  // one per recording pass
-  long innovations_written_ = 0;  // rows of the current pass's innovation file
+  long innovations_written_ = 0;                       // rows of the current pass's innovation file
   // Smoothed rows arriving backward: the run being collected (rows
   // smoothed_low_ .. smoothed_low_ + n - 1, stored last first).
   std::vector<double> smoothed_buffer_;

@@ -9,10 +9,9 @@
 // and keeps a thinned copy for the plots.
 #pragma once
 
+#include <Eigen/Core>
 #include <functional>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "ident/ekf/ekf.h"
 #include "ident/estimation_log.h"
@@ -70,8 +69,7 @@ class EkfMemoryHistory : public EkfHistorySink {
   void ParameterStdAtEstimate(int log, int row, const EkfRowValues& std) override;
   void Innovations(int log, int row, const std::vector<int>& columns, const Eigen::VectorXd& nu,
                    const Eigen::VectorXd& std, double nis, int dof) override;
-  void VisitParameters(
-      const std::function<void(int, int, const EkfRowValues&)>& visit) override;
+  void VisitParameters(const std::function<void(int, int, const EkfRowValues&)>& visit) override;
 
  private:
   std::vector<EkfLogHistory>& logs_;

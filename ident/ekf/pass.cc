@@ -1,12 +1,12 @@
 #include "ident/ekf/pass.h"
 
+#include <glog/logging.h>
+
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <utility>
-
-#include <Eigen/Cholesky>
-#include <glog/logging.h>
 
 #include "ident/ekf/rts_smoother.h"
 
@@ -21,8 +21,8 @@ double Seconds(Clock::time_point a, Clock::time_point b) {
 
 // (log, row) of the steps first, first + 1, ..., first + count of the chained
 // logs, first at (log, row).
-std::vector<std::pair<int, int>> StepRows(const std::vector<EstimationLog>& logs, int log,
-                                          int row, long count) {
+std::vector<std::pair<int, int>> StepRows(const std::vector<EstimationLog>& logs, int log, int row,
+                                          long count) {
   std::vector<std::pair<int, int>> rows;
   rows.reserve(count + 1);
   rows.push_back({log, row});
@@ -43,9 +43,8 @@ long SmootherBlockRows(long rows, long option) {
   return std::max(256L, static_cast<long>(std::ceil(std::sqrt(static_cast<double>(rows)))));
 }
 
-PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool freeze,
-                   bool smooth, const EkfPassRecord& rec, EkfHistorySink* history,
-                   long* rows_done) {
+PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool freeze, bool smooth,
+                   const EkfPassRecord& rec, EkfHistorySink* history, long* rows_done) {
   const EkfOptions& options = pb.options;
   const int np = pb.free.size();
   const int n = kNumStates + np;
@@ -103,7 +102,8 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
                                 P.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt());
       }
       if (np == 0) return;
-      const Eigen::VectorXd p_std = P.diagonal().tail(np).cwiseMax(0.0).cwiseSqrt().cwiseProduct(scales);
+      const Eigen::VectorXd p_std =
+          P.diagonal().tail(np).cwiseMax(0.0).cwiseSqrt().cwiseProduct(scales);
       if (rec.parameters) history->Parameters(l, row, z.tail(np).cwiseProduct(scales), p_std);
       if (rec.std_at_estimate) history->ParameterStdAtEstimate(l, row, p_std);
     };
@@ -158,8 +158,7 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
         smoother.Clear();
         for (long j = 1; j <= count; ++j) {
           const auto [L, row] = rows[j];
-          if (!filter.Predict(L, row) || !add_transition(L, row) ||
-              !filter.Update(nullptr)) {
+          if (!filter.Predict(L, row) || !add_transition(L, row) || !filter.Update(nullptr)) {
             return fail();
           }
         }
@@ -169,17 +168,17 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
             << " differ from the forward pass (a filter state not in the checkpoint)";
       }
       CHECK_EQ(smoother.size(), count);
-      smoother.Smooth(x_next, P_next, [&](int j, const Eigen::VectorXd& xs,
-                                          const Eigen::MatrixXd& Ps) {
-        if (j == count && b < blocks - 1) return;  // the later block's first step, visited
-        if (j == 0) {
-          x_next = xs;
-          P_next = Ps;
-        }
-        const auto [L, row] = rows[j];
-        history->SmoothedStates(L, row, xs.head<kNumStates>(),
-                                Ps.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt());
-      });
+      smoother.Smooth(
+          x_next, P_next, [&](int j, const Eigen::VectorXd& xs, const Eigen::MatrixXd& Ps) {
+            if (j == count && b < blocks - 1) return;  // the later block's first step, visited
+            if (j == 0) {
+              x_next = xs;
+              P_next = Ps;
+            }
+            const auto [L, row] = rows[j];
+            history->SmoothedStates(L, row, xs.head<kNumStates>(),
+                                    Ps.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt());
+          });
     }
     out.smoother_s += Seconds(c0, Clock::now());
   }

@@ -21,9 +21,8 @@
 // Internal to ident/ekf: ekf.cc uses it.
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "ident/ekf/ekf.h"
 #include "ident/ekf/filter.h"

@@ -21,14 +21,12 @@ std::vector<State> EkfStatesAtRows::Reported(int log, bool smoothed) const {
   return out;
 }
 
-void EkfStatesAtRows::FilteredStates(int log, int row, const EkfRowValues& x,
-                                     const EkfRowValues&) {
+void EkfStatesAtRows::FilteredStates(int log, int row, const EkfRowValues& x, const EkfRowValues&) {
   auto it = kept_.find({log, row});
   if (it != kept_.end()) it->second.first = x;
 }
 
-void EkfStatesAtRows::SmoothedStates(int log, int row, const EkfRowValues& x,
-                                     const EkfRowValues&) {
+void EkfStatesAtRows::SmoothedStates(int log, int row, const EkfRowValues& x, const EkfRowValues&) {
   auto it = kept_.find({log, row});
   if (it != kept_.end()) it->second.second = x;
 }

@@ -33,7 +33,8 @@ std::vector<EstimationLog> TwoLogs() {
   return {MakeEstimationLog(a, 0, 3001), MakeEstimationLog(b, 0, 2001)};
 }
 
-EkfResult RunSmoothed(const std::vector<EstimationLog>& logs, long block_rows, bool covariance_pass) {
+EkfResult RunSmoothed(const std::vector<EstimationLog>& logs, long block_rows,
+                      bool covariance_pass) {
   EkfOptions options;
   options.smoother = true;
   options.covariance_pass = covariance_pass;
@@ -72,8 +73,7 @@ void ExpectSameSmoothedStates(const EkfResult& checkpointed, const EkfResult& in
     ASSERT_TRUE(m.smoothed_states.allFinite());
     ASSERT_TRUE(c.smoothed_states.allFinite());
     EXPECT_LE(RelativeDifference(c.smoothed_states, m.smoothed_states), 1e-12) << "log " << L;
-    EXPECT_LE(RelativeDifference(c.smoothed_state_std, m.smoothed_state_std), 1e-12)
-        << "log " << L;
+    EXPECT_LE(RelativeDifference(c.smoothed_state_std, m.smoothed_state_std), 1e-12) << "log " << L;
     // The forward pass itself is untouched by the checkpoints.
     EXPECT_EQ(c.states, m.states);
   }

@@ -5,6 +5,8 @@
 // adaptation pass (two passes record innovations and parameters) and an
 // innovation gate at 1e-2, so that the two passes reject different samples
 // and the innovations of both are merged.
+#include "ident/ekf/history_files.h"
+
 #include <gtest/gtest.h>
 
 #include <string>
@@ -14,7 +16,6 @@
 #include "core/log.h"
 #include "dynamics/vehicle.h"
 #include "ident/ekf/ekf.h"
-#include "ident/ekf/history_files.h"
 #include "ident/ekf/report.h"
 #include "ident/estimation_log.h"
 #include "ident/noise_weights.h"
@@ -80,7 +81,8 @@ TEST(EkfHistoryFilesTest, WritesWhatTheInMemoryHistoryWrites) {
       EXPECT_EQ(thin.nis_dof[i], full.nis_dof[row]);
     }
     for (const bool smoothed : {false, true}) {
-      const std::vector<State> states = files.states_at_rows().Reported(static_cast<int>(L), smoothed);
+      const std::vector<State> states =
+          files.states_at_rows().Reported(static_cast<int>(L), smoothed);
       ASSERT_EQ(states.size(), keep[L].size());
       for (size_t w = 0; w < keep[L].size(); ++w) {
         const Eigen::MatrixXd& expected = smoothed ? full.smoothed_states : full.states;
