@@ -24,8 +24,8 @@
 #include "experiments/cli/prior_flag.h"
 #include "ident/ekf/ekf.h"
 #include "ident/ekf/history_files.h"
-#include "ident/ekf/states_at_rows.h"
 #include "ident/ekf/report.h"
+#include "ident/ekf/states_at_rows.h"
 #include "ident/estimation_log.h"
 #include "ident/noise_weights.h"
 #include "ident/output_error/output_error.h"  // ChannelFitErrors
@@ -325,7 +325,9 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   for (size_t i = 0; i < fit_predictions.size(); ++i) {
     const std::vector<int>& rows = thinned.logs[i].rows;
     thinned_fit.emplace_back(rows.size(), fit_predictions[i].cols());
-    for (size_t k = 0; k < rows.size(); ++k) thinned_fit[i].row(k) = fit_predictions[i].row(rows[k]);
+    for (size_t k = 0; k < rows.size(); ++k) {
+      thinned_fit[i].row(k) = fit_predictions[i].row(rows[k]);
+    }
   }
   for (const std::string& file :
        RenderFigures(EkfFigures(thinned, thinned_fit), dir + "/plots", &plot_error)) {

@@ -275,8 +275,9 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
     record2.std_at_estimate = true;
     Vehicle at_estimate = anchored;
     at_estimate.parameters = result.parameters;
-    const EkfProblem problem2{at_estimate, logs, problem.noise, options, free, problem.lower, problem.upper,
-                           problem.qp, problem.prior, problem.qx, problem.total_rows};
+    const EkfProblem problem2{at_estimate, logs, problem.noise, options, free,
+                              problem.lower, problem.upper, problem.qp, problem.prior,
+                              problem.qx, problem.total_rows};
     const Clock::time_point c2 = Clock::now();
     const PassResult pass2 =
         RunPass(problem2, p_final, true, options.smoother, record2, history, &rows_done);
