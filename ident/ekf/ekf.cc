@@ -203,6 +203,9 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   for (int i = 0; i < kNumStates; ++i) problem.qx[i] = options.state_psd[i];
   const int passes = (covariance_pass ? 2 : 1) + options.noise_adaptations;
   problem.total_rows = rows_per_pass * passes;
+  if (options.smoother) {
+    problem.total_rows += SmootherRecomputedRows(rows_per_pass, options.smoother_block_rows);
+  }
 
   // Histories: in result.logs unless the caller takes them.
   std::unique_ptr<EkfMemoryHistory> in_memory;

@@ -43,6 +43,11 @@ long SmootherBlockRows(long rows, long option) {
   return std::max(256L, static_cast<long>(std::ceil(std::sqrt(static_cast<double>(rows)))));
 }
 
+long SmootherRecomputedRows(long rows, long option) {
+  const long block = SmootherBlockRows(rows, option);
+  return (rows - 2) / block * block;  // (blocks - 1) * block
+}
+
 PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool freeze, bool smooth,
                    const EkfPassRecord& rec, EkfHistorySink* history, long* rows_done) {
   const EkfOptions& options = pb.options;
@@ -160,6 +165,10 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
           const auto [L, row] = rows[j];
           if (!filter.Predict(L, row) || !add_transition(L, row) || !filter.Update(nullptr)) {
             return fail();
+          }
+          ++*rows_done;
+          if (options.progress && *rows_done % options.progress_every_rows == 0) {
+            options.progress(*rows_done, pb.total_rows);
           }
         }
         const EkfFilterState& end = checkpoints[b + 1];

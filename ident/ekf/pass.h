@@ -53,5 +53,8 @@ PassResult RunPass(const EkfProblem& problem, const Eigen::VectorXd& p_start, bo
 // The rows per smoother block: EkfOptions::smoother_block_rows, or (0) about
 // sqrt(rows), at least 256.
 long SmootherBlockRows(long rows, long option);
+// The rows a smoothing pass over `rows` runs twice (every block but the
+// last), for the progress report.
+long SmootherRecomputedRows(long rows, long option);
 
 }  // namespace coaxid

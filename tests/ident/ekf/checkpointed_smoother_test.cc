@@ -39,9 +39,16 @@ EkfResult RunSmoothed(const std::vector<EstimationLog>& logs, long block_rows,
   options.smoother = true;
   options.covariance_pass = covariance_pass;
   options.smoother_block_rows = block_rows;
+  // The progress counts the recomputed rows too, and ends at its total.
+  long done = 0, total = -1;
+  options.progress = [&](long d, long t) {
+    done = d;
+    total = t;
+  };
   const EkfResult r =
       RunEkf(LoadVehicle(Source("configs/glmav.yaml")), logs, NoiseFromData(logs), options);
   EXPECT_TRUE(r.usable) << r.failure;
+  EXPECT_EQ(done, total);
   return r;
 }
 
