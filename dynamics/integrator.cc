@@ -492,6 +492,8 @@ bool Integrator::Reset(double t0, const Eigen::VectorXd& x0, const Eigen::Matrix
 }
 
 void Integrator::ForgetStepHint() { impl_->step_hint = 0.0; }
+double Integrator::step_hint() const { return impl_->step_hint; }
+void Integrator::RestoreStepHint(double hint) { impl_->step_hint = hint; }
 
 bool Integrator::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd* S) {
   return impl_->AdvanceTo(t1, x, S);

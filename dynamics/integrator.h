@@ -90,6 +90,11 @@ class Integrator {
   // interval: a run that calls it first gives the same numbers whatever ran
   // before it.
   void ForgetStepHint();
+  // The learnt first-step hint (0: none), and putting one back: a caller that
+  // saves it with the state and restores both repeats the same steps exactly
+  // (the EKF's checkpointed smoother recomputes stretches of its forward pass).
+  double step_hint() const;
+  void RestoreStepHint(double hint);
 
   // Integrates from the current time to t1 > current time without stepping past t1 (stop time
   // t1), and writes the state at t1 to *x and, if S is not null, the sensitivities (n x ns) to

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <set>
 
 #include <nlohmann/json.hpp>
@@ -22,7 +23,9 @@
 #include "experiments/cli/flags.h"
 #include "experiments/cli/prior_flag.h"
 #include "ident/ekf/ekf.h"
+#include "ident/ekf/history_files.h"
 #include "ident/ekf/report.h"
+#include "ident/ekf/states_at_rows.h"
 #include "ident/estimation_log.h"
 #include "ident/noise_weights.h"
 #include "ident/output_error/output_error.h"  // ChannelFitErrors
@@ -168,11 +171,11 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   const ParameterSet initial = vehicle.parameters;
   std::fprintf(stderr, "identify: ekf: reading %zu log(s)%s\n", paths.size(),
                validate_paths.empty() ? "" : " and the validation logs");
-  const std::vector<Log> logs = ReadFlightLogs(paths, "logs");
-  const std::vector<Log> validate_logs = ReadFlightLogs(validate_paths, "validate");
-
-  // Estimation and validation data (experiments/cli/estimation_io.h).
-  LogSplit split = SplitEstimationAndValidation(logs, validate_logs, run.holdout_fraction);
+  // Estimation and validation data (experiments/cli/estimation_io.h); the
+  // logs as read are not kept (a long log's columns are 160 B a row).
+  LogSplit split = SplitEstimationAndValidation(ReadFlightLogs(paths, "logs"),
+                                                ReadFlightLogs(validate_paths, "validate"),
+                                                run.holdout_fraction);
   std::vector<EstimationLog>& estimation = split.estimation;
   std::vector<EstimationLog>& validation = split.validation;
   context.validation_description = split.description;
@@ -219,7 +222,16 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
                "adaptation pass(es), estimation pass%s ...\n",
                estimation.size(), vehicle.parameters.FreeIndices().size(),
                options.noise_adaptations, options.covariance_pass ? ", covariance pass" : "");
-  const EkfResult result = RunEkf(vehicle, estimation, context.noise, options);
+  // The per-row records stream to scratch files (ident/ekf/history_files.h):
+  // memory independent of the log length; the states are kept at the fit
+  // windows' first rows only.
+  std::vector<std::vector<int>> window_starts;
+  for (const EstimationLog& log : estimation) {
+    window_starts.push_back(WindowStartRows(log, FLAGS_ekf_window_s));
+  }
+  EkfHistoryFiles history(estimation, options.smoother, fs::temp_directory_path().string(),
+                          window_starts);
+  const EkfResult result = RunEkf(vehicle, estimation, context.noise, options, &history);
   if (!result.usable) throw ComputationError(result.failure);
   std::fprintf(stderr, "identify: ekf: done in %.2f s (propagation %.2f s, updates %.2f s, "
                "smoother %.2f s)\n", result.total_s, result.propagation_s, result.update_s,
@@ -233,11 +245,9 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
                        (result.covariance_pass ? " of the covariance pass" : "");
   std::vector<Eigen::MatrixXd> fit_predictions;
   for (size_t i = 0; i < estimation.size(); ++i) {
-    const EkfLogHistory& h = result.logs[i];
-    fit_predictions.push_back(WindowPredictions(estimated, estimation[i],
-                                                smoothed ? h.smoothed_states : h.states,
-                                                FLAGS_ekf_window_s, options.integrator,
-                                                &context.failed_fit_windows));
+    fit_predictions.push_back(WindowPredictions(
+        estimated, estimation[i], history.states_at_rows().Reported(static_cast<int>(i), smoothed),
+        FLAGS_ekf_window_s, options.integrator, &context.failed_fit_windows));
   }
   context.fit = ChannelFitErrors(estimation, fit_predictions);
 
@@ -253,13 +263,18 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
     state_only.noise_adaptations = 0;
     for (const auto& [name, s] : result.noise.std) validation_noise.std[name] = s;
     std::fprintf(stderr, "identify: ekf: state estimation on the validation data ...\n");
-    const EkfResult v = RunEkf(fixed, validation, validation_noise, state_only);
+    std::vector<std::vector<int>> validation_starts;
+    for (const EstimationLog& log : validation) {
+      validation_starts.push_back(WindowStartRows(log, FLAGS_ekf_window_s));
+    }
+    EkfStatesAtRows validation_states(validation_starts);
+    const EkfResult v =
+        RunEkf(fixed, validation, validation_noise, state_only, &validation_states);
     if (!v.usable) throw ComputationError("validation: " + v.failure);
     for (size_t i = 0; i < validation.size(); ++i) {
-      const EkfLogHistory& h = v.logs[i];
       validation_predictions.push_back(WindowPredictions(
-          estimated, validation[i], smoothed ? h.smoothed_states : h.states, FLAGS_ekf_window_s,
-          options.integrator, &context.failed_validation_windows));
+          estimated, validation[i], validation_states.Reported(static_cast<int>(i), smoothed),
+          FLAGS_ekf_window_s, options.integrator, &context.failed_validation_windows));
     }
     context.validation = ChannelFitErrors(validation, validation_predictions);
   }
@@ -281,13 +296,15 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   write("config.yaml", vehicle.ResolvedConfig());
   write("estimated_config.yaml", estimated.ResolvedConfig());
   auto write_table = [&](const std::string& name,
-                         void (*table)(const EkfResult&, const EmitText&)) {
-    WriteFileAtomically(dir + "/" + name, [&](const EmitText& emit) { table(result, emit); });
+                         const std::function<void(const EmitText&)>& table) {
+    WriteFileAtomically(dir + "/" + name, table);
     files.push_back(name);
   };
-  write_table("states.csv", EkfStatesCsv);
-  write_table("parameters.csv", EkfParametersCsv);
-  write_table("innovations.csv", EkfInnovationsCsv);
+  write_table("states.csv", [&](const EmitText& emit) { history.StatesCsv(emit); });
+  write_table("parameters.csv", [&](const EmitText& emit) {
+    history.ParametersCsv(result.free_names, result.covariance_pass, emit);
+  });
+  write_table("innovations.csv", [&](const EmitText& emit) { history.InnovationsCsv(emit); });
   for (size_t i = 0; i < estimation.size(); ++i) {
     WriteMeasuredVersusModelCsv(dir + "/fit_" + estimation[i].name + ".csv", estimation[i],
                                 fit_predictions[i]);
@@ -301,8 +318,19 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   std::fprintf(stderr, "identify: ekf: plotting (gnuplot) ...\n");
   nlohmann::json plots = nlohmann::json::array();
   std::string plot_error;
+  // The plots from the thinned copy (at most ~3000 rows a log, as they draw).
+  EkfResult thinned = result;
+  thinned.logs = history.thinned();
+  std::vector<Eigen::MatrixXd> thinned_fit;
+  for (size_t i = 0; i < fit_predictions.size(); ++i) {
+    const std::vector<int>& rows = thinned.logs[i].rows;
+    thinned_fit.emplace_back(rows.size(), fit_predictions[i].cols());
+    for (size_t k = 0; k < rows.size(); ++k) {
+      thinned_fit[i].row(k) = fit_predictions[i].row(rows[k]);
+    }
+  }
   for (const std::string& file :
-       RenderFigures(EkfFigures(result, fit_predictions), dir + "/plots", &plot_error)) {
+       RenderFigures(EkfFigures(thinned, thinned_fit), dir + "/plots", &plot_error)) {
     plots.push_back("plots/" + file);
   }
   context.outputs = {{"files", files}, {"plots", plots}};

@@ -59,14 +59,21 @@
 // Optional Rauch-Tung-Striebel smoother (rts_smoother.h) over the whole chain
 // in the last pass: smoothed states at every row. (The parameters' smoothed
 // values equal the final filtered ones up to their random walk: they are not
-// kept.)
+// kept.) Its store comes from checkpoints of the filter and recomputation
+// (ekf/pass.h), so its memory grows with sqrt(rows), not with the rows.
 //
 // Cost (bench/ident/ekf/ekf_bench.cc, 60 s at 200 Hz, 12 unknowns augmented): per
 // 5 ms row ~14 us propagation (CVODE restarted at the input change, ~5
 // steps; one autodiff Jacobian; the exponential series) and ~8 us update
 // (autodiff of the accelerometer, Cholesky, Joseph form), per pass; the
-// smoother ~15 us per row. The variational-equation transition costs ~35 us
-// per row instead of 14.
+// smoother ~15 us per row, plus the recomputation of every block but the
+// last (about one more pass of the filter: ekf/pass.h). The
+// variational-equation transition costs ~35 us per row instead of 14.
+//
+// Memory: the filter and its smoother O(sqrt(rows)) (ekf/pass.h); the
+// per-row records go to an EkfHistorySink (ekf/history_sink.h), by default
+// EkfResult::logs (~1 kB a row), or streamed to files (ekf/history_files.h:
+// what `coaxid identify --method=ekf` does).
 //
 // Failures (CVODE, a covariance that is not positive definite, non-finite
 // values, or divergence: the normalised innovation squared per degree of
@@ -138,6 +145,13 @@ struct EkfOptions {
   // flight), which makes every std too large and the NIS too small.
   int noise_adaptations = 0;
   bool smoother = true;
+  // Rows per block of the smoother's checkpoints (ekf/pass.h): the forward
+  // pass keeps the filter state every this many rows and the backward pass
+  // recomputes one block at a time. 0: about sqrt(rows), at least 256 (memory
+  // O(sqrt(rows)), one more forward pass in time); at least the rows: the
+  // whole store in memory, nothing recomputed. The smoothed states are the
+  // same either way.
+  long smoother_block_rows = 0;
 
   // ident/scale_gauge.h. A parameter with initial_parameter_std_by_name is a
   // prior: on a member of the scale group it fixes the scale.
@@ -206,6 +220,9 @@ double InnovationGateThreshold(double probability);
 
 struct EkfLogHistory {
   std::string source, name;
+  // The log rows held, when this is a thinned copy (the plots of a long log,
+  // ekf/history_files.h); empty: every row.
+  std::vector<int> rows;
   std::vector<double> times;
   std::vector<int> channels;               // FlightChannel of each measured column
   std::vector<std::string> channel_names;
@@ -279,12 +296,17 @@ struct EkfResult {
   Integrator::Stats integrator;
 };
 
+class EkfHistorySink;  // ekf/history_sink.h
+
 // Runs the filter (and smoother) over flight logs in order. vehicle: model
 // and parameters (values = initial estimates, `estimated` = which are
 // augmented). noise: measurement noise std of every channel the logs hold.
-// Throws InputError if options are invalid, a log is not a flight log, or a
-// channel has no noise level; numerical failures give usable = false.
+// history: where the per-row records go (null: EkfResult::logs; otherwise
+// logs stays empty). Throws InputError if options are invalid, a log is not
+// a flight log, or a channel has no noise level; numerical failures give
+// usable = false.
 EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
-                 const NoiseWeights& noise, const EkfOptions& options);
+                 const NoiseWeights& noise, const EkfOptions& options,
+                 EkfHistorySink* history = nullptr);
 
 }  // namespace coaxid

@@ -115,6 +115,10 @@ class EkfPropagator {
   };
   const Counters& counters() const { return counters_; }
   Integrator::Stats integrator_stats() const { return integrator_->stats(); }
+  // CVODE's first-step hint carried from interval to interval (dynamics/integrator.h):
+  // with the filter state, what makes the next Propagate() repeat exactly.
+  double step_hint() const { return integrator_->step_hint(); }
+  void RestoreStepHint(double hint) { integrator_->RestoreStepHint(hint); }
 
  private:
   // F, G at the midpoint of a sub-step (G with respect to the filter's p).

@@ -5,9 +5,12 @@
 #include <cstdio>
 #include <limits>
 
+#include <glog/logging.h>
+
 #include "core/report.h"
 #include "dynamics/outputs.h"
 #include "dynamics/simulator.h"
+#include "ident/ekf/history_csv.h"
 
 namespace coaxid {
 namespace {
@@ -18,31 +21,44 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // NaN and infinity have no JSON form: null.
 json Number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
-std::string Csv(double v) {
-  if (!std::isfinite(v)) return "";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.10g", v);
-  return buffer;
-}
-
-std::string CsvName(const std::string& name) {
-  // Log names may hold commas in principle; keep the CSV well formed.
-  std::string out = name;
-  std::replace(out.begin(), out.end(), ',', '_');
-  return out;
-}
-
-// Every k-th index so that at most max_points remain.
-int Stride(size_t n, size_t max_points = 3000) {
-  return static_cast<int>(std::max<size_t>(1, (n + max_points - 1) / max_points));
-}
-
 }  // namespace
+
+// Every k-th index so that at most 3000 remain.
+int EkfPlotStride(size_t n) {
+  constexpr size_t kMaxPoints = 3000;
+  return static_cast<int>(std::max<size_t>(1, (n + kMaxPoints - 1) / kMaxPoints));
+}
+
+std::vector<int> WindowStartRows(const EstimationLog& log, double window_s) {
+  std::vector<int> starts;
+  const int N = log.NumRows();
+  int a = 0;
+  while (a < N) {
+    starts.push_back(a);
+    int b = a + 1;
+    while (b < N && log.inputs.time(b) < log.inputs.time(a) + window_s - 1e-9) ++b;
+    a = b;
+  }
+  return starts;
+}
 
 Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& log,
                                   const Eigen::MatrixXd& start_states, double window_s,
                                   const IntegratorOptions& integrator, int* failed_windows) {
+  std::vector<State> starts;
+  for (const int row : WindowStartRows(log, window_s)) {
+    starts.push_back(start_states.row(row).transpose());
+  }
+  return WindowPredictions(vehicle, log, starts, window_s, integrator, failed_windows);
+}
+
+Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& log,
+                                  const std::vector<State>& window_start_states,
+                                  double window_s, const IntegratorOptions& integrator,
+                                  int* failed_windows) {
   const int N = log.NumRows();
+  const std::vector<int> starts = WindowStartRows(log, window_s);
+  CHECK_EQ(starts.size(), window_start_states.size());
   const Eigen::VectorXd theta = vehicle.parameters.Values();
   Simulator simulator(vehicle.model, theta, integrator);
   Eigen::MatrixXd out = Eigen::MatrixXd::Constant(N, log.NumChannels(), kNaN);
@@ -50,12 +66,11 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
   const HeldInputPath path(log.inputs);
   const InputVector lag = vehicle.model.InputLags(theta.data());
   double y[kNumFlightChannels];
-  int a = 0;
-  while (a < N) {
-    int b = a + 1;
-    while (b < N && log.inputs.time(b) < log.inputs.time(a) + window_s - 1e-9) ++b;
+  for (size_t w = 0; w < starts.size(); ++w) {
     // Window rows [a, b), from the state at row a.
-    const Eigen::VectorXd x0 = start_states.row(a).transpose();
+    const int a = starts[w];
+    const int b = w + 1 < starts.size() ? starts[w + 1] : N;
+    const Eigen::VectorXd x0 = window_start_states[w];
     bool ok = x0.allFinite();
     const HeldInput start = path.At(a, lag);
     if (ok && b - 1 > a) {
@@ -66,7 +81,6 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
     }
     if (!ok) {
       if (failed_windows) ++*failed_windows;
-      a = b;
       continue;
     }
     for (int k = a; k < b; ++k) {
@@ -74,7 +88,6 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
       FlightOutputsAt(vehicle.model, theta.data(), x.data(), trajectory.inputs[k - a], y);
       for (int c = 0; c < log.NumChannels(); ++c) out(k, c) = y[log.channels[c]];
     }
-    a = b;
   }
   return out;
 }
@@ -257,31 +270,21 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
 
 void EkfStatesCsv(const EkfResult& r, const EmitText& emit) {
   TextPieces pieces(emit);
-  std::string& out = pieces.text;
   const bool smoothed = !r.logs.empty() && r.logs[0].smoothed_states.size() > 0;
-  out = "log,t";
-  for (int i = 0; i < kNumStates; ++i) {
-    out += std::string(",") + StateName(i) + "," + StateName(i) + "_std";
-  }
-  if (smoothed) {
-    for (int i = 0; i < kNumStates; ++i) {
-      out += std::string(",") + StateName(i) + "_smoothed," + StateName(i) + "_smoothed_std";
-    }
-  }
-  out += "\n";
+  pieces.text = EkfStatesCsvHeader(smoothed);
+  Eigen::Matrix<double, kNumStates, 4> row;  // x, std, smoothed x, smoothed std
   for (const EkfLogHistory& h : r.logs) {
-    const std::string name = CsvName(h.name);
+    const std::string name = EkfCsvLogName(h.name);
     for (size_t k = 0; k < h.times.size(); ++k) {
-      out += name + "," + Csv(h.times[k]);
-      for (int i = 0; i < kNumStates; ++i) {
-        out += "," + Csv(h.states(k, i)) + "," + Csv(h.state_std(k, i));
-      }
+      row.col(0) = h.states.row(k).transpose();
+      row.col(1) = h.state_std.row(k).transpose();
       if (smoothed) {
-        for (int i = 0; i < kNumStates; ++i) {
-          out += "," + Csv(h.smoothed_states(k, i)) + "," + Csv(h.smoothed_state_std(k, i));
-        }
+        row.col(2) = h.smoothed_states.row(k).transpose();
+        row.col(3) = h.smoothed_state_std.row(k).transpose();
       }
-      out += "\n";
+      AppendEkfStatesCsvRow(name, h.times[k], row.col(0).data(), row.col(1).data(),
+                            smoothed ? row.col(2).data() : nullptr,
+                            smoothed ? row.col(3).data() : nullptr, &pieces.text);
       pieces.EndOfRow();
     }
   }
@@ -289,23 +292,18 @@ void EkfStatesCsv(const EkfResult& r, const EmitText& emit) {
 
 void EkfParametersCsv(const EkfResult& r, const EmitText& emit) {
   TextPieces pieces(emit);
-  std::string& out = pieces.text;
   const bool at_estimate = r.covariance_pass;
-  out = "log,t";
-  for (const std::string& p : r.free_names) {
-    out += "," + p + "," + p + "_std";
-    if (at_estimate) out += "," + p + "_std_at_estimate";
-  }
-  out += "\n";
+  const int np = static_cast<int>(r.free_names.size());
+  pieces.text = EkfParametersCsvHeader(r.free_names, at_estimate);
+  Eigen::MatrixXd row(np, 3);  // value, std, std at the estimate
   for (const EkfLogHistory& h : r.logs) {
-    const std::string name = CsvName(h.name);
+    const std::string name = EkfCsvLogName(h.name);
     for (size_t k = 0; k < h.times.size(); ++k) {
-      out += name + "," + Csv(h.times[k]);
-      for (size_t j = 0; j < r.free_names.size(); ++j) {
-        out += "," + Csv(h.parameters(k, j)) + "," + Csv(h.parameter_std(k, j));
-        if (at_estimate) out += "," + Csv(h.parameter_std_at_estimate(k, j));
-      }
-      out += "\n";
+      row.col(0) = h.parameters.row(k).transpose();
+      row.col(1) = h.parameter_std.row(k).transpose();
+      if (at_estimate) row.col(2) = h.parameter_std_at_estimate.row(k).transpose();
+      AppendEkfParametersCsvRow(name, h.times[k], np, row.col(0).data(), row.col(1).data(),
+                                at_estimate ? row.col(2).data() : nullptr, &pieces.text);
       pieces.EndOfRow();
     }
   }
@@ -313,35 +311,19 @@ void EkfParametersCsv(const EkfResult& r, const EmitText& emit) {
 
 void EkfInnovationsCsv(const EkfResult& r, const EmitText& emit) {
   TextPieces pieces(emit);
-  std::string& out = pieces.text;
-  // Channels of every log, in first-seen order.
-  std::vector<std::string> channels;
+  std::vector<std::vector<std::string>> names;
+  for (const EkfLogHistory& h : r.logs) names.push_back(h.channel_names);
+  const std::vector<std::string> channels = EkfInnovationChannels(names);
+  pieces.text = EkfInnovationsCsvHeader(channels);
   for (const EkfLogHistory& h : r.logs) {
-    for (const std::string& c : h.channel_names) {
-      if (std::find(channels.begin(), channels.end(), c) == channels.end()) channels.push_back(c);
-    }
-  }
-  out = "log,t";
-  for (const std::string& c : channels) out += "," + c + "," + c + "_std";
-  out += ",nis,nis_dof\n";
-  for (const EkfLogHistory& h : r.logs) {
-    std::vector<int> column(channels.size(), -1);
-    for (size_t j = 0; j < channels.size(); ++j) {
-      for (size_t c = 0; c < h.channel_names.size(); ++c) {
-        if (h.channel_names[c] == channels[j]) column[j] = static_cast<int>(c);
-      }
-    }
-    const std::string name = CsvName(h.name);
+    const std::vector<int> column = EkfInnovationColumns(channels, h.channel_names);
+    const std::string name = EkfCsvLogName(h.name);
+    Eigen::MatrixXd row(h.channel_names.size(), 2);  // nu, sqrt(S_ii) per column of the log
     for (size_t k = 0; k < h.times.size(); ++k) {
-      out += name + "," + Csv(h.times[k]);
-      for (size_t j = 0; j < channels.size(); ++j) {
-        if (column[j] < 0) {
-          out += ",,";
-        } else {
-          out += "," + Csv(h.innovations(k, column[j])) + "," + Csv(h.innovation_std(k, column[j]));
-        }
-      }
-      out += "," + Csv(h.nis[k]) + "," + std::to_string(h.nis_dof[k]) + "\n";
+      row.col(0) = h.innovations.row(k).transpose();
+      row.col(1) = h.innovation_std.row(k).transpose();
+      AppendEkfInnovationsCsvRow(name, h.times[k], column, row.col(0).data(), row.col(1).data(),
+                                 h.nis[k], h.nis_dof[k], &pieces.text);
       pieces.EndOfRow();
     }
   }
@@ -366,7 +348,7 @@ std::vector<EkfFigure> EkfFigures(const EkfResult& r,
       PlotSeries lower{"", {}, {}, "lines dt 2 lc rgb 'gray40'"};
       double offset = 0;
       for (const EkfLogHistory& h : r.logs) {
-        const int stride = Stride(h.times.size() * r.logs.size());
+        const int stride = h.rows.empty() ? EkfPlotStride(h.times.size() * r.logs.size()) : 1;
         for (size_t k = 0; k < h.times.size(); k += stride) {
           const double t = offset + h.times[k] - h.times[0];
           const double v = h.parameters(k, j), s = h.parameter_std(k, j);
@@ -399,7 +381,7 @@ std::vector<EkfFigure> EkfFigures(const EkfResult& r,
   }
   for (size_t L = 0; L < r.logs.size(); ++L) {
     const EkfLogHistory& h = r.logs[L];
-    const int stride = Stride(h.times.size());
+    const int stride = h.rows.empty() ? EkfPlotStride(h.times.size()) : 1;
     // Innovations.
     Figure innovations;
     innovations.title = "EKF innovations (estimation pass), " + h.source + ": points; +-3 sqrt(S_ii)";

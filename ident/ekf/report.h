@@ -38,6 +38,17 @@ namespace coaxid {
 Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& log,
                                   const Eigen::MatrixXd& start_states, double window_s,
                                   const IntegratorOptions& integrator, int* failed_windows);
+// The first rows of those windows.
+std::vector<int> WindowStartRows(const EstimationLog& log, double window_s);
+// The same from the states at the windows' first rows only (one per
+// WindowStartRows entry): a long log's states need not all be kept.
+Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& log,
+                                  const std::vector<State>& window_start_states,
+                                  double window_s, const IntegratorOptions& integrator,
+                                  int* failed_windows);
+
+// The plots' stride over n rows: every k-th row so that at most 3000 remain.
+int EkfPlotStride(size_t n);
 
 // Per-channel fit errors of predictions: ChannelFitErrors of ident/output_error/output_error.h.
 

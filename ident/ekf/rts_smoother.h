@@ -13,7 +13,8 @@
 //
 // Storage per step: C_k (n x n), D_k (n(n+1)/2, packed) and
 // a_k = x_{k|k} - C_k x_{k+1|k} (n), so that x_{k|N} = a_k + C_k x_{k+1|N}:
-// (1.5 n^2 + 1.5 n) doubles, 7.2 kB at n = 24, 86 MB for a 60 s log at 200 Hz.
+// (1.5 n^2 + 1.5 n) doubles, 7.2 kB at n = 24, 86 MB for a 60 s log at 200 Hz:
+// the EKF keeps one block of steps at a time (ekf/pass.h).
 #pragma once
 
 #include <functional>

@@ -1,0 +1,199 @@
+#include "ident/ekf/pass.h"
+
+#include <glog/logging.h>
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+#include "ident/ekf/rts_smoother.h"
+
+namespace coaxid {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+// (log, row) of the steps first, first + 1, ..., first + count of the chained
+// logs, first at (log, row).
+std::vector<std::pair<int, int>> StepRows(const std::vector<EstimationLog>& logs, int log, int row,
+                                          long count) {
+  std::vector<std::pair<int, int>> rows;
+  rows.reserve(count + 1);
+  rows.push_back({log, row});
+  for (long j = 0; j < count; ++j) {
+    if (++row == logs[log].NumRows()) {
+      ++log;
+      row = 0;
+    }
+    rows.push_back({log, row});
+  }
+  return rows;
+}
+
+}  // namespace
+
+long SmootherBlockRows(long rows, long option) {
+  if (option > 0) return option;
+  return std::max(256L, static_cast<long>(std::ceil(std::sqrt(static_cast<double>(rows)))));
+}
+
+long SmootherRecomputedRows(long rows, long option) {
+  const long block = SmootherBlockRows(rows, option);
+  return (rows - 2) / block * block;  // (blocks - 1) * block
+}
+
+PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool freeze, bool smooth,
+                   const EkfPassRecord& rec, EkfHistorySink* history, long* rows_done) {
+  const EkfOptions& options = pb.options;
+  const int np = pb.free.size();
+  const int n = kNumStates + np;
+  const Eigen::VectorXd& scales = pb.free.scales();
+  PassResult out;
+  out.innovations = rec.innovations;
+  history->BeginPass(rec);
+  EkfFilter filter(pb, p_start, freeze);
+  auto fail = [&]() {
+    out.ok = false;
+    out.failure = filter.failure();
+    out.failure_time = filter.failure_time();
+    return out;
+  };
+  std::string why;
+
+  // Steps: the rows of the chained logs; step s > 0 is reached by the
+  // transition from step s - 1 (a prediction, or a log boundary). Block b
+  // holds the transitions into steps b K + 1 .. min((b + 1) K, steps - 1),
+  // from the checkpoint at step b K.
+  long steps = 0;
+  for (const EstimationLog& log : pb.logs) steps += log.NumRows();
+  const long block = SmootherBlockRows(steps, options.smoother_block_rows);
+  const long blocks = (steps - 2) / block + 1;
+  const long last_block_start = (blocks - 1) * block;
+  std::vector<EkfFilterState> checkpoints;
+  RtsSmoother smoother(n);
+  if (smooth) {
+    checkpoints.reserve(blocks);
+    smoother.Reserve(static_cast<int>(std::min(block, steps - 1)));
+  }
+  auto add_transition = [&](int L, int row) {
+    if (smoother.AddTransition(filter.state().z, filter.state().P, filter.Phi(),
+                               filter.predicted_z(), filter.predicted_P(), &why)) {
+      return true;
+    }
+    return filter.Fail(pb.logs[L].inputs.time(row), L, row, why);
+  };
+
+  long step = 0;
+  for (size_t L = 0; L < pb.logs.size(); ++L) {
+    const EstimationLog& log = pb.logs[L];
+    const int N = log.NumRows();
+    auto record = [&](int row) {
+      const int l = static_cast<int>(L);
+      const Eigen::VectorXd& z = filter.state().z;
+      const Eigen::MatrixXd& P = filter.state().P;
+      if (rec.innovations && !filter.updated_columns().empty()) {
+        history->Innovations(l, row, filter.updated_columns(), filter.innovations(),
+                             filter.InnovationStd(), filter.nis(),
+                             static_cast<int>(filter.updated_columns().size()));
+      }
+      if (rec.states) {
+        history->FilteredStates(l, row, z.head<kNumStates>(),
+                                P.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt());
+      }
+      if (np == 0) return;
+      const Eigen::VectorXd p_std =
+          P.diagonal().tail(np).cwiseMax(0.0).cwiseSqrt().cwiseProduct(scales);
+      if (rec.parameters) history->Parameters(l, row, z.tail(np).cwiseProduct(scales), p_std);
+      if (rec.std_at_estimate) history->ParameterStdAtEstimate(l, row, p_std);
+    };
+    for (int k = 0; k < N; ++k, ++step) {
+      const Clock::time_point c0 = Clock::now();
+      if (!filter.Predict(static_cast<int>(L), k)) return fail();
+      const Clock::time_point c1 = Clock::now();
+      out.propagation_s += Seconds(c0, c1);
+      // The last block's store as the rows come; the earlier blocks' are recomputed.
+      if (smooth && step > last_block_start && !add_transition(static_cast<int>(L), k)) {
+        return fail();
+      }
+      const Clock::time_point c2 = Clock::now();
+      out.smoother_s += Seconds(c1, c2);
+      if (!filter.Update(&out)) return fail();
+      out.update_s += Seconds(c2, Clock::now());
+      if (smooth && step % block == 0 && step <= last_block_start) {
+        checkpoints.push_back(filter.state());
+      }
+      record(k);
+      ++*rows_done;
+      if (k > 0 && options.progress && *rows_done % options.progress_every_rows == 0) {
+        options.progress(*rows_done, pb.total_rows);
+      }
+    }
+  }
+  {
+    const Eigen::LLT<Eigen::MatrixXd> check(filter.state().P);
+    if (check.info() != Eigen::Success) {
+      const EstimationLog& log = pb.logs.back();
+      filter.Fail(log.inputs.times().back(), static_cast<int>(pb.logs.size()) - 1,
+                  log.NumRows() - 1, "final covariance not positive definite");
+      return fail();
+    }
+  }
+  out.z = filter.state().z;
+  out.P = filter.state().P;
+  if (smooth) {
+    const Clock::time_point c0 = Clock::now();
+    CHECK_EQ(static_cast<long>(checkpoints.size()), blocks);
+    // Smoothed x, P at the first step of the later block (at the end: the filtered ones).
+    Eigen::VectorXd x_next = out.z;
+    Eigen::MatrixXd P_next = out.P;
+    for (long b = blocks - 1; b >= 0; --b) {
+      const long first = b * block;
+      const long count = std::min(first + block, steps - 1) - first;
+      const EkfFilterState& start = checkpoints[b];
+      const std::vector<std::pair<int, int>> rows = StepRows(pb.logs, start.log, start.row, count);
+      if (b < blocks - 1) {
+        // This block again from its checkpoint, storing its transitions.
+        filter.Restore(start);
+        smoother.Clear();
+        for (long j = 1; j <= count; ++j) {
+          const auto [L, row] = rows[j];
+          if (!filter.Predict(L, row) || !add_transition(L, row) || !filter.Update(nullptr)) {
+            return fail();
+          }
+          ++*rows_done;
+          if (options.progress && *rows_done % options.progress_every_rows == 0) {
+            options.progress(*rows_done, pb.total_rows);
+          }
+        }
+        const EkfFilterState& end = checkpoints[b + 1];
+        CHECK(filter.state().z == end.z && filter.state().P == end.P)
+            << "EKF smoother: the recomputed rows up to row " << end.row << " of log " << end.log
+            << " differ from the forward pass (a filter state not in the checkpoint)";
+      }
+      CHECK_EQ(smoother.size(), count);
+      smoother.Smooth(
+          x_next, P_next, [&](int j, const Eigen::VectorXd& xs, const Eigen::MatrixXd& Ps) {
+            if (j == count && b < blocks - 1) return;  // the later block's first step, visited
+            if (j == 0) {
+              x_next = xs;
+              P_next = Ps;
+            }
+            const auto [L, row] = rows[j];
+            history->SmoothedStates(L, row, xs.head<kNumStates>(),
+                                    Ps.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt());
+          });
+    }
+    out.smoother_s += Seconds(c0, Clock::now());
+  }
+  out.counters = filter.propagator().counters();
+  out.integrator = filter.propagator().integrator_stats();
+  return out;
+}
+
+}  // namespace coaxid
