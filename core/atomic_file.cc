@@ -92,42 +92,50 @@ void MakeOutputFolder(const std::string& dir) {
   }
 }
 
-std::string ReadFile(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) Fail(path, "cannot open for reading", errno);
+FileReader::FileReader(const std::string& path) : path_(path) {
+  fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) Fail(path, "cannot open for reading", errno);
   struct stat info;
-  if (::fstat(fd, &info) != 0) {
+  if (::fstat(fd_, &info) != 0) {
     const int error = errno;
-    ::close(fd);
+    ::close(fd_);
     Fail(path, "cannot read", error);
   }
   if (S_ISDIR(info.st_mode)) {
-    ::close(fd);
+    ::close(fd_);
     Fail(path, "cannot read", EISDIR);
   }
+  size_hint_ = info.st_size > 0 ? static_cast<size_t>(info.st_size) : 0;
+}
+
+FileReader::~FileReader() { ::close(fd_); }
+
+size_t FileReader::Read(char* dest, size_t room) {
+  while (true) {
+    const ssize_t n = ::read(fd_, dest, room);
+    if (n >= 0) return static_cast<size_t>(n);
+    if (errno != EINTR) Fail(path_, "cannot read", errno);
+  }
+}
+
+std::string ReadFile(const std::string& path) {
+  FileReader file(path);
   // One allocation of the right size and one read for regular files; the loop
   // also copes with pipes and files that grow while being read.
-  std::string contents(info.st_size > 0 ? static_cast<size_t>(info.st_size) : 0, '\0');
+  std::string contents(file.size_hint(), '\0');
   size_t used = 0;
   char chunk[1 << 16];
   while (true) {
     char* dest = used < contents.size() ? &contents[used] : chunk;
     const size_t room = used < contents.size() ? contents.size() - used : sizeof(chunk);
-    const ssize_t n = ::read(fd, dest, room);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      const int error = errno;
-      ::close(fd);
-      Fail(path, "cannot read", error);
-    }
+    const size_t n = file.Read(dest, room);
     if (n == 0) break;
     if (dest == chunk) {
       contents.resize(used);
-      contents.append(chunk, static_cast<size_t>(n));
+      contents.append(chunk, n);
     }
-    used += static_cast<size_t>(n);
+    used += n;
   }
-  ::close(fd);
   contents.resize(used);
   return contents;
 }

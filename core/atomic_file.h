@@ -46,4 +46,24 @@ void MakeOutputFolder(const std::string& dir);
 // Reads a whole file. Throws InputError naming the path if it cannot be read.
 std::string ReadFile(const std::string& path);
 
+// A file read in pieces (a log of an hour is 290 MB of text: parsed piece by
+// piece it never sits in memory whole). Throws InputError naming the path
+// if it cannot be opened or read, as ReadFile.
+class FileReader {
+ public:
+  explicit FileReader(const std::string& path);
+  ~FileReader();
+  FileReader(const FileReader&) = delete;
+  FileReader& operator=(const FileReader&) = delete;
+  // Reads up to `room` bytes into `dest`; 0 at the end of the file.
+  size_t Read(char* dest, size_t room);
+  // The size when opened (0 for pipes): a hint, not a promise.
+  size_t size_hint() const { return size_hint_; }
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+  size_t size_hint_ = 0;
+};
+
 }  // namespace coaxid

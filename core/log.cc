@@ -114,17 +114,26 @@ std::string Quote(std::string_view field) {
   throw InputError(message);
 }
 
-// Splits text into lines, 1-based numbering, accepting \n and \r\n endings.
+// Splits text into lines, 1-based numbering, accepting \n and \r\n endings:
+// from text in memory, or from a file read in pieces (a line's view holds
+// until the next call). Every line returned is followed in memory by '\r',
+// '\n' or '\0' (ParseRow's fast path stops there).
 class LineReader {
  public:
   explicit LineReader(std::string_view text) : p_(text.data()), end_(text.data() + text.size()) {
-    // A UTF-8 byte order mark, as some spreadsheets write, is not part of the first line.
-    if (text.size() >= 3 && std::memcmp(p_, "\xEF\xBB\xBF", 3) == 0) p_ += 3;
+    SkipByteOrderMark();
+  }
+  explicit LineReader(FileReader* file) : file_(file) {
+    Refill();
+    SkipByteOrderMark();
   }
 
   bool Next(std::string_view* line) {
-    if (p_ == end_) return false;
     const char* newline = static_cast<const char*>(std::memchr(p_, '\n', end_ - p_));
+    while (newline == nullptr && Refill()) {
+      newline = static_cast<const char*>(std::memchr(p_, '\n', end_ - p_));
+    }
+    if (p_ == end_) return false;
     const char* stop = newline != nullptr ? newline : end_;
     const char* line_end = (stop > p_ && stop[-1] == '\r') ? stop - 1 : stop;
     *line = std::string_view(p_, line_end - p_);
@@ -134,7 +143,8 @@ class LineReader {
   }
 
   int number() const { return number_; }
-  // Upper bound on the lines left, to reserve the column vectors once.
+  // About how many lines are left, to reserve the column vectors once: the
+  // lines in memory, or the bytes left over the mean line length so far.
   size_t LinesLeft() const {
     size_t count = 0;
     for (const char* p = p_; p < end_; ++count) {
@@ -145,13 +155,43 @@ class LineReader {
       }
       p = newline + 1;
     }
-    return count;
+    if (file_ == nullptr || count == 0) return count;
+    const size_t in_memory = static_cast<size_t>(end_ - p_);
+    const size_t unread = file_->size_hint() > read_ ? file_->size_hint() - read_ : 0;
+    return count + unread * count / std::max<size_t>(in_memory, 1) + 1;
   }
 
  private:
-  const char* p_;
-  const char* end_;
+  static constexpr size_t kPiece = 1 << 20;
+
+  void SkipByteOrderMark() {
+    // A UTF-8 byte order mark, as some spreadsheets write, is not part of the first line.
+    if (end_ - p_ >= 3 && std::memcmp(p_, "\xEF\xBB\xBF", 3) == 0) p_ += 3;
+  }
+
+  // Keeps the unread part and appends the next piece of the file; false at
+  // its end (or for text in memory).
+  bool Refill() {
+    if (file_ == nullptr || at_end_) return false;
+    const size_t kept = static_cast<size_t>(end_ - p_);
+    std::memmove(buffer_.data(), p_, kept);
+    buffer_.resize(kept + kPiece);
+    const size_t n = file_->Read(buffer_.data() + kept, kPiece);
+    read_ += n;
+    at_end_ = n == 0;
+    buffer_.resize(kept + n);  // std::string: buffer_[size()] is '\0'
+    p_ = buffer_.data();
+    end_ = p_ + buffer_.size();
+    return n > 0;
+  }
+
+  const char* p_ = nullptr;
+  const char* end_ = nullptr;
   int number_ = 0;
+  FileReader* file_ = nullptr;
+  std::string buffer_;
+  size_t read_ = 0;
+  bool at_end_ = false;
 };
 
 // Parses the text of one log; `source` names it in messages.
@@ -159,6 +199,7 @@ class Parser {
  public:
   // A std::string, not a view: its terminating '\0' ends the last line for ParseRow.
   Parser(const std::string& text, const std::string& source) : reader_(text), source_(source) {}
+  Parser(FileReader* file, const std::string& source) : reader_(file), source_(source) {}
 
   Log Parse() {
     log_.source = source_;
@@ -483,8 +524,8 @@ const std::vector<std::string>& InputColumns() {
 }
 
 Log ReadLog(const std::string& path) {
-  const std::string text = ReadFile(path);
-  return Parser(text, path).Parse();
+  FileReader file(path);
+  return Parser(&file, path).Parse();
 }
 
 Log ParseLog(const std::string& text, const std::string& source) {

@@ -251,15 +251,7 @@ void EkfHistoryFiles::Innovations(int log, int row, const std::vector<int>& colu
   innovations_.back()->Append(record.data(), record.size());
   ++innovations_written_;
   const int i = ThinnedIndex(log, row);
-  if (i >= 0) {
-    EkfLogHistory& h = thinned_[log];
-    h.nis[i] = nis;
-    h.nis_dof[i] = dof;
-    for (size_t j = 0; j < columns.size(); ++j) {
-      h.innovations(i, columns[j]) = nu[j];
-      h.innovation_std(i, columns[j]) = std[j];
-    }
-  }
+  if (i >= 0) StoreInnovations(i, columns, nu, std, nis, dof, &thinned_[log]);
 }
 
 void EkfHistoryFiles::VisitParameters(

@@ -59,16 +59,20 @@ void EkfMemoryHistory::ParameterStdAtEstimate(int log, int row, const EkfRowValu
   logs_[log].parameter_std_at_estimate.row(row) = std.transpose();
 }
 
+void StoreInnovations(int row, const std::vector<int>& columns, const Eigen::VectorXd& nu,
+                      const Eigen::VectorXd& std, double nis, int dof, EkfLogHistory* h) {
+  h->nis[row] = nis;
+  h->nis_dof[row] = dof;
+  for (size_t j = 0; j < columns.size(); ++j) {
+    h->innovations(row, columns[j]) = nu[j];
+    h->innovation_std(row, columns[j]) = std[j];
+  }
+}
+
 void EkfMemoryHistory::Innovations(int log, int row, const std::vector<int>& columns,
                                    const Eigen::VectorXd& nu, const Eigen::VectorXd& std,
                                    double nis, int dof) {
-  EkfLogHistory& h = logs_[log];
-  h.nis[row] = nis;
-  h.nis_dof[row] = dof;
-  for (size_t j = 0; j < columns.size(); ++j) {
-    h.innovations(row, columns[j]) = nu[j];
-    h.innovation_std(row, columns[j]) = std[j];
-  }
+  StoreInnovations(row, columns, nu, std, nis, dof, &logs_[log]);
 }
 
 void EkfMemoryHistory::VisitParameters(

@@ -55,6 +55,10 @@ class EkfHistorySink {
       const std::function<void(int log, int row, const EkfRowValues& value)>& visit) = 0;
 };
 
+// Stores one row's innovations (EkfHistorySink::Innovations) at `row` of *h.
+void StoreInnovations(int row, const std::vector<int>& columns, const Eigen::VectorXd& nu,
+                      const Eigen::VectorXd& std, double nis, int dof, EkfLogHistory* h);
+
 // Into EkfLogHistory (EkfResult::logs): sized for the logs by the constructor.
 class EkfMemoryHistory : public EkfHistorySink {
  public:

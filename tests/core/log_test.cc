@@ -502,6 +502,40 @@ TEST(LogTest, ReadLogNamesThePathInMessages) {
   }
 }
 
+// ReadLog reads files in 1 MB pieces: a log of several pieces, with \r\n
+// endings and no final newline, reads as ParseLog reads the same text, and
+// an error in the last piece names its line.
+TEST(LogTest, ReadLogAcrossPiecesEqualsParseLog) {
+  const TempDir temp;
+  const int rows = 60000;  // about 4 MB
+  std::string text = "\xEF\xBB\xBF# kind: flight\r\n" + std::string(kFlightHeader) + "\r\n";
+  for (int k = 0; k < rows; ++k) {
+    text += FlightRow(std::to_string(0.005 * (k + 1)), {{"x", std::to_string(k % 977)}});
+    if (k + 1 < rows) text += "\r\n";
+  }
+  const std::string path = temp.path() + "/long.csv";
+  WriteFileAtomically(path, text);
+  const Log read = ReadLog(path);
+  const Log parsed = ParseLog(text, path);
+  ASSERT_EQ(read.NumRows(), rows);
+  EXPECT_EQ(read.columns, parsed.columns);
+  EXPECT_EQ(read.metadata, parsed.metadata);
+  for (size_t j = 0; j < read.columns.size(); ++j) {
+    EXPECT_EQ(read.values[j], parsed.values[j]) << read.columns[j];
+  }
+  EXPECT_EQ(read.Column("x")[rows - 1], (rows - 1) % 977);
+
+  const std::string bad = temp.path() + "/bad.csv";
+  const size_t last = text.rfind("\r\n");
+  WriteFileAtomically(bad, text.substr(0, last) + "\r\n" + FlightRow("1e9", {{"q", "nope"}}));
+  try {
+    ReadLog(bad);
+    FAIL() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), StartsWith(bad + ":" + std::to_string(rows + 2) + ": column 'q': "));
+  }
+}
+
 // A log with the values that break naive formatting: not exactly representable
 // decimals, extremes of the range, subnormals, -0 and missing values.
 Log TrickyLog() {
