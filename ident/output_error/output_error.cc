@@ -68,13 +68,21 @@ std::vector<int> SegmentStarts(const EstimationLog& log, double seconds) {
 
 class ProgressCallback : public ceres::IterationCallback {
  public:
-  ProgressCallback(const OutputErrorOptions& options, std::string stage, Clock::time_point start)
-      : options_(options), stage_(std::move(stage)), start_(start) {}
+  // rows: the logs' rows, each simulated (with sensitivities) once an iteration.
+  ProgressCallback(const OutputErrorOptions& options, std::string stage, Clock::time_point start,
+                   long rows)
+      : options_(options), stage_(std::move(stage)), start_(start), rows_(rows) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
     if (options_.progress) {
+      // No time left is printed: how many iterations a solve takes is not
+      // known before it converges; the time an iteration takes is.
       char line[256];
-      std::snprintf(line, sizeof line, "%s: iteration %2d  cost %.6e  |step| %.2e  elapsed %.1f s",
-                    stage_.c_str(), s.iteration, s.cost, s.step_norm, SecondsSince(start_));
+      std::snprintf(line, sizeof line,
+                    "%s: iteration %2d  cost %.6e  |step| %.2e  elapsed %.1f s  (%.1f s, %.0f "
+                    "rows/s)",
+                    stage_.c_str(), s.iteration, s.cost, s.step_norm, SecondsSince(start_),
+                    s.iteration_time_in_seconds,
+                    rows_ / std::max(s.iteration_time_in_seconds, 1e-9));
       options_.progress(line);
     }
     return ceres::SOLVER_CONTINUE;
@@ -84,6 +92,7 @@ class ProgressCallback : public ceres::IterationCallback {
   const OutputErrorOptions& options_;
   std::string stage_;
   Clock::time_point start_;
+  long rows_;
 };
 
 // States a flight log cannot see and the model does not use: held constant on
@@ -454,6 +463,8 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   solver_options.line_search_interpolation_type = ceres::BISECTION;
   solver_options.max_num_line_search_step_size_iterations = 1;
 
+  long total_rows = 0;
+  for (const EstimationLog& log : logs) total_rows += log.NumRows();
   Assembly previous;
   bool have_previous = false;
   std::vector<Eigen::MatrixXd> previous_predictions;
@@ -527,7 +538,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
         coarse ? options.coarse_max_iterations : options.max_iterations;
     solver_options.function_tolerance =
         coarse ? options.coarse_function_tolerance : options.function_tolerance;
-    ProgressCallback callback(options, stage_name, start);
+    ProgressCallback callback(options, stage_name, start, total_rows);
     solver_options.callbacks = {&callback};
     ceres::Solver::Summary summary;
     const auto solve_start = Clock::now();
