@@ -17,6 +17,7 @@
 #include "experiments/cli/flags.h"
 #include "ident/baseline/balance_holds.h"
 #include "ident/discover/discovery.h"
+#include "ident/discover/practical_significance.h"
 
 DEFINE_double(alpha, 0.01,
               "discover: significance level of the candidate tests (family-wise per round, Holm)");
@@ -147,11 +148,7 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
   }
   for (const RemovedEffect& e : r.removed) {
     o << "\nRemoved " << e.effect << " (added earlier): in the model with " << e.made_redundant_by
-      << " it removes only " << NumberText(100 * e.share_of_excess, "%.1f")
-      << " % of its channels' excess error"
-      << (std::isfinite(e.share_of_excess_held_out)
-              ? " (" + NumberText(100 * e.share_of_excess_held_out, "%.1f") + " % held out)"
-              : std::string())
+      << " it removes only " << ShareText(e.share_of_excess, e.share_of_excess_held_out)
       << ": it was standing in for " << e.made_redundant_by << ".\n";
   }
   if (!r.symptoms.empty()) {

@@ -121,9 +121,9 @@ bool ReachesAny(const std::vector<std::string>& channels, const std::vector<std:
 // (CandidateScore::blind_at_bounds); the channels it reaches from there are
 // added to its own.
 void MarkRestartsAtBounds(const Vehicle& fitted, const Vehicle& declared,
-                       const std::map<std::string, std::vector<std::string>>& distorted,
-                       const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
-                       std::vector<CandidateScore>* scores);
+                          const std::map<std::string, std::vector<std::string>>& distorted,
+                          const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
+                          std::vector<CandidateScore>* scores);
 
 // Noise-weighted residual sum of squares and its sample count.
 double WeightedRss(const std::vector<EstimationLog>& logs,

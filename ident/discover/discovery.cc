@@ -273,12 +273,9 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
               NumberText(o.min_channels_excess, "%.3g") + ")";
       } else if (!(s.share_of_excess >= o.min_share_of_excess &&
                    share_held_out >= o.min_share_of_excess)) {
-        why = "practically insignificant: it removes " + NumberText(100 * s.share_of_excess, "%.1f") +
-              " % of its channels' excess error" +
-              (std::isfinite(s.share_of_excess_held_out)
-                   ? " (" + NumberText(100 * s.share_of_excess_held_out, "%.1f") + " % held out)"
-                   : std::string()) +
-              ", below " + NumberText(100 * o.min_share_of_excess, "%.0f") + " %";
+        why = "practically insignificant: it removes " +
+              ShareText(s.share_of_excess, s.share_of_excess_held_out) + ", below " +
+              NumberText(100 * o.min_share_of_excess, "%.0f") + " %";
       }
       s.confirmed = why.empty();
       s.why_not_confirmed = why;
@@ -376,12 +373,9 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
                            : ShareOfExcessRemoved(snapshot.validation, now->validation,
                                                   snapshot.validation_residual_tests, channels)
                                  .share;
-    Say(o, "  without " + effect + ": it removes " + NumberText(100 * r.share_of_excess, "%.1f") +
-               " % of its channels' excess error" +
-               (std::isfinite(r.share_of_excess_held_out)
-                    ? " (" + NumberText(100 * r.share_of_excess_held_out, "%.1f") + " % held out)"
-                    : std::string()) +
-               " in the model with " + latest);
+    Say(o, "  without " + effect + ": it removes " +
+               ShareText(r.share_of_excess, r.share_of_excess_held_out) + " in the model with " +
+               latest);
     const bool material =
         r.share_of_excess >= o.min_share_of_excess &&
         !(std::isfinite(r.share_of_excess_held_out) &&

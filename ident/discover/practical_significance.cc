@@ -1,6 +1,9 @@
 #include "ident/discover/practical_significance.h"
 
 #include <algorithm>
+#include <cmath>
+
+#include "core/report_values.h"
 
 namespace coaxid {
 
@@ -33,6 +36,13 @@ ExcessShare ShareOfExcessRemoved(const std::map<std::string, FitError>& before,
   }
   out.share = out.excess > 0 ? removed / out.excess : 0.0;
   return out;
+}
+
+std::string ShareText(double share, double share_held_out) {
+  return NumberText(100 * share, "%.1f") + " % of its channels' excess error" +
+         (std::isfinite(share_held_out)
+              ? " (" + NumberText(100 * share_held_out, "%.1f") + " % held out)"
+              : std::string());
 }
 
 }  // namespace coaxid

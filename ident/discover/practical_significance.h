@@ -37,4 +37,8 @@ ExcessShare ShareOfExcessRemoved(const std::map<std::string, FitError>& before,
                                  const std::vector<ChannelResidualTest>& tests,
                                  const std::vector<std::string>& channels);
 
+// "12.3 % of its channels' excess error (4.5 % held out)": a share and its
+// held-out share (NaN: none), in words.
+std::string ShareText(double share, double share_held_out);
+
 }  // namespace coaxid
