@@ -105,16 +105,7 @@ EkfHistoryFiles::EkfHistoryFiles(const std::vector<EstimationLog>& logs, bool sm
       h.times.push_back(log.inputs.time(h.rows[i]));
       h.measured.row(i) = log.values.row(h.rows[i]);
     }
-    h.states.setConstant(n, kNumStates, kNaN);
-    h.state_std.setConstant(n, kNumStates, kNaN);
-    if (smoother_) {
-      h.smoothed_states.setConstant(n, kNumStates, kNaN);
-      h.smoothed_state_std.setConstant(n, kNumStates, kNaN);
-    }
-    h.innovations.setConstant(n, m, kNaN);
-    h.innovation_std.setConstant(n, m, kNaN);
-    h.nis.assign(n, kNaN);
-    h.nis_dof.assign(n, 0);
+    SizeStateAndInnovationRecords(n, m, smoother_, &h);
     thinned_.push_back(std::move(h));
   }
 }

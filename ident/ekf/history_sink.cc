@@ -21,20 +21,24 @@ EkfMemoryHistory::EkfMemoryHistory(const std::vector<EstimationLog>& logs, int n
     h.channels = log.channels;
     h.channel_names = log.channel_names;
     h.measured = log.values;
-    h.states.setConstant(N, kNumStates, kNaN);
-    h.state_std.setConstant(N, kNumStates, kNaN);
-    if (smoother) {
-      h.smoothed_states.setConstant(N, kNumStates, kNaN);
-      h.smoothed_state_std.setConstant(N, kNumStates, kNaN);
-    }
+    SizeStateAndInnovationRecords(N, m, smoother, &h);
     h.parameters.setConstant(N, np, kNaN);
     h.parameter_std.setConstant(N, np, kNaN);
     if (covariance_pass) h.parameter_std_at_estimate.setConstant(N, np, kNaN);
-    h.innovations.setConstant(N, m, kNaN);
-    h.innovation_std.setConstant(N, m, kNaN);
-    h.nis.assign(N, kNaN);
-    h.nis_dof.assign(N, 0);
   }
+}
+
+void SizeStateAndInnovationRecords(int rows, int m, bool smoother, EkfLogHistory* h) {
+  h->states.setConstant(rows, kNumStates, kNaN);
+  h->state_std.setConstant(rows, kNumStates, kNaN);
+  if (smoother) {
+    h->smoothed_states.setConstant(rows, kNumStates, kNaN);
+    h->smoothed_state_std.setConstant(rows, kNumStates, kNaN);
+  }
+  h->innovations.setConstant(rows, m, kNaN);
+  h->innovation_std.setConstant(rows, m, kNaN);
+  h->nis.assign(rows, kNaN);
+  h->nis_dof.assign(rows, 0);
 }
 
 void EkfMemoryHistory::FilteredStates(int log, int row, const EkfRowValues& x,

@@ -55,6 +55,10 @@ class EkfHistorySink {
       const std::function<void(int log, int row, const EkfRowValues& value)>& visit) = 0;
 };
 
+// Sizes h's per-row state and innovation records for `rows` rows and `m`
+// measured columns (the smoothed states only with `smoother`), all NaN.
+void SizeStateAndInnovationRecords(int rows, int m, bool smoother, EkfLogHistory* h);
+
 // Stores one row's innovations (EkfHistorySink::Innovations) at `row` of *h.
 void StoreInnovations(int row, const std::vector<int>& columns, const Eigen::VectorXd& nu,
                       const Eigen::VectorXd& std, double nis, int dof, EkfLogHistory* h);
