@@ -129,10 +129,8 @@ class LineReader {
   }
 
   bool Next(std::string_view* line) {
-    const char* newline = static_cast<const char*>(std::memchr(p_, '\n', end_ - p_));
-    while (newline == nullptr && Refill()) {
-      newline = static_cast<const char*>(std::memchr(p_, '\n', end_ - p_));
-    }
+    const char* newline = FindNewline();
+    while (newline == nullptr && Refill()) newline = FindNewline();
     if (p_ == end_) return false;
     const char* stop = newline != nullptr ? newline : end_;
     const char* line_end = (stop > p_ && stop[-1] == '\r') ? stop - 1 : stop;
@@ -164,6 +162,11 @@ class LineReader {
  private:
   static constexpr size_t kPiece = 1 << 20;
 
+  // The next '\n' from p_, nullptr if none (or nothing read yet).
+  const char* FindNewline() const {
+    return p_ < end_ ? static_cast<const char*>(std::memchr(p_, '\n', end_ - p_)) : nullptr;
+  }
+
   void SkipByteOrderMark() {
     // A UTF-8 byte order mark, as some spreadsheets write, is not part of the first line.
     if (end_ - p_ >= 3 && std::memcmp(p_, "\xEF\xBB\xBF", 3) == 0) p_ += 3;
@@ -174,7 +177,7 @@ class LineReader {
   bool Refill() {
     if (file_ == nullptr || at_end_) return false;
     const size_t kept = static_cast<size_t>(end_ - p_);
-    std::memmove(buffer_.data(), p_, kept);
+    if (kept > 0) std::memmove(buffer_.data(), p_, kept);
     buffer_.resize(kept + kPiece);
     const size_t n = file_->Read(buffer_.data() + kept, kPiece);
     read_ += n;
