@@ -6,6 +6,7 @@
 #include "experiments/cli/check.h"
 #include "experiments/cli/compare.h"
 #include "experiments/cli/demo.h"
+#include "experiments/cli/design.h"
 #include "experiments/cli/discover.h"
 #include "experiments/cli/identify.h"
 #include "experiments/cli/import.h"
@@ -33,6 +34,9 @@ const char* const kCliUsage =
     "  study    --spec=FILE --out=DIR [--jobs=N] [--restart] [--max_runs=N]\n"
     "           --spec=FILE --out=DIR --export=N | --job=DIR/jobs/job_K.yaml | --merge --out=DIR\n"
     "           (mpirun -n K coaxid study ... in a -DCOAXID_MPI=ON build; docs/study.md)\n"
+    "  design   --config=F --scenario=S[,S2...] --out=DIR [--design_parameters=Cz,sigma0]\n"
+    "           [--criterion=D|A] [--max_attitude_rad=R] [--add_holds=N] (predicted std of a\n"
+    "           planned experiment; a designed excitation and balance holds)\n"
     "  demo     --out=DIR   (the whole story on the shipped data -> DIR/report.html)\n"
     "Run `coaxid --help` for every flag.\n";
 
@@ -69,6 +73,7 @@ int RunCli(int argc, char** argv) {
     if (command == "discover") return RunDiscover();
     if (command == "import") return RunImport();
     if (command == "study") return RunStudy();
+    if (command == "design") return RunDesign();
     std::cerr << "coaxid: unknown subcommand '" << command << "'\n" << kCliUsage;
     return 2;
   } catch (const InputError& e) {

@@ -27,7 +27,7 @@ void CheckPositive(double v, const std::string& where) {
 void ParseBalance(const YAML::Node& node, const std::string& where, BalanceScenario* b) {
   CheckKeys(node,
             {"rate_hz", "hold_s", "omega1", "omega2", "delta_cx", "delta_cy", "steady_points",
-             "per_rotor", "noise_std"},
+             "per_rotor", "noise_std", "holds"},
             where);
   if (node["rate_hz"]) b->rate_hz = ReadDouble(node["rate_hz"], where + ".rate_hz");
   if (node["hold_s"]) b->hold_s = ReadDouble(node["hold_s"], where + ".hold_s");
@@ -36,11 +36,29 @@ void ParseBalance(const YAML::Node& node, const std::string& where, BalanceScena
   for (const char* key : {"omega1", "omega2", "delta_cx", "delta_cy"}) {
     if (!node[key]) continue;
     std::vector<double> v = ReadDoubleList(node[key], where + "." + key);
-    if (v.empty()) throw InputError(where + "." + key + ": needs at least one value");
+    // An empty speed list means no grid: the holds are those listed under `holds`.
+    const bool speed = std::string(key) == "omega1" || std::string(key) == "omega2";
+    if (v.empty() && !speed) throw InputError(where + "." + key + ": needs at least one value");
     if (std::string(key) == "omega1") b->omega1 = v;
     if (std::string(key) == "omega2") b->omega2 = v;
     if (std::string(key) == "delta_cx") b->delta_cx = v;
     if (std::string(key) == "delta_cy") b->delta_cy = v;
+  }
+  if (const YAML::Node holds = node["holds"]) {
+    if (!holds.IsSequence()) throw InputError(where + ".holds: expected a list of [omega1, omega2, delta_cx, delta_cy]");
+    for (size_t i = 0; i < holds.size(); ++i) {
+      const std::string wh = where + ".holds[" + std::to_string(i) + "]";
+      const std::vector<double> v = ReadDoubleList(holds[i], wh);
+      if (v.size() != 4) throw InputError(wh + ": expected [omega1, omega2, delta_cx, delta_cy]");
+      if (!(v[0] >= 0 && v[1] >= 0)) throw InputError(wh + ": rotor speeds must be >= 0");
+      b->holds.push_back({v[0], v[1], v[2], v[3]});
+    }
+  }
+  if (b->omega1.empty() != b->omega2.empty()) {
+    throw InputError(where + ": omega1 and omega2 are both empty (holds only) or both given");
+  }
+  if (b->omega1.empty() && b->holds.empty()) {
+    throw InputError(where + ": no holds: give the omega1 x omega2 grid or a list under holds");
   }
   if (node["steady_points"]) b->steady_points = ReadBool(node["steady_points"], where);
   if (node["per_rotor"]) b->per_rotor = ReadBool(node["per_rotor"], where);
@@ -102,7 +120,10 @@ void ParseFlight(const YAML::Node& node, const std::string& where, FlightScenari
   }
   if (const YAML::Node e = node["excitation"]) {
     const std::string w = where + ".excitation";
-    CheckKeys(e, {"type", "start_s", "amplitude", "min_hz", "max_hz", "period_s", "pulse_s"}, w);
+    CheckKeys(e,
+              {"type", "start_s", "amplitude", "min_hz", "max_hz", "period_s", "pulse_s", "bands",
+               "quiet"},
+              w);
     Excitation& x = f->excitation;
     if (e["type"]) {
       const std::string type = ReadString(e["type"], w + ".type");
@@ -131,6 +152,50 @@ void ParseFlight(const YAML::Node& node, const std::string& where, FlightScenari
     CheckPositive(x.pulse_s, w + ".pulse_s");
     if (!(x.min_hz > 0 && x.max_hz > x.min_hz)) {
       throw InputError(w + ": need 0 < min_hz < max_hz");
+    }
+    if (const YAML::Node quiet = e["quiet"]) {
+      if (!quiet.IsSequence()) throw InputError(w + ".quiet: expected a list of [from_s, to_s]");
+      for (size_t i = 0; i < quiet.size(); ++i) {
+        const std::string wq = w + ".quiet[" + std::to_string(i) + "]";
+        const std::vector<double> v = ReadDoubleList(quiet[i], wq);
+        if (v.size() != 2 || !(v[1] >= v[0])) throw InputError(wq + ": expected [from_s, to_s], from <= to");
+        x.quiet.push_back({v[0], v[1]});
+      }
+    }
+    if (const YAML::Node bands = e["bands"]) {
+      if (x.type != Excitation::Type::kMultisine) {
+        throw InputError(w + ".bands: only a multisine is shaped by bands");
+      }
+      for (const char* key : {"amplitude", "min_hz", "max_hz"}) {
+        if (e[key]) throw InputError(w + ".bands: replaces '" + key + "'; give one or the other");
+      }
+      if (!bands.IsSequence() || bands.size() == 0) {
+        throw InputError(w + ".bands: expected a non-empty list");
+      }
+      for (size_t i = 0; i < bands.size(); ++i) {
+        const std::string wb = w + ".bands[" + std::to_string(i) + "]";
+        CheckKeys(bands[i], {"min_hz", "max_hz", "rms"}, wb);
+        Excitation::Band band;
+        if (!bands[i]["min_hz"] || !bands[i]["max_hz"]) {
+          throw InputError(wb + ": needs min_hz and max_hz");
+        }
+        band.min_hz = ReadDouble(bands[i]["min_hz"], wb + ".min_hz");
+        band.max_hz = ReadDouble(bands[i]["max_hz"], wb + ".max_hz");
+        if (!(band.min_hz > 0 && band.max_hz > band.min_hz)) {
+          throw InputError(wb + ": need 0 < min_hz < max_hz");
+        }
+        if (!x.bands.empty() && band.min_hz < x.bands.back().max_hz) {
+          throw InputError(wb + ": bands must be in increasing order and not overlap");
+        }
+        if (bands[i]["rms"]) {
+          ReadNamedDoubles(bands[i]["rms"], {"omega1", "omega2", "delta_cx", "delta_cy"},
+                           wb + ".rms", &band.rms);
+        }
+        for (const auto& [channel, rms] : band.rms) {
+          if (!(rms >= 0)) throw InputError(wb + ".rms." + channel + ": must be >= 0");
+        }
+        x.bands.push_back(band);
+      }
     }
   }
   if (node["columns"]) {

@@ -9,6 +9,7 @@
 // parameters (a real vehicle differs from its nominal config).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -25,6 +26,9 @@ struct BalanceScenario {
   std::vector<double> omega2{0, 110, 135, 160};   // rad/s
   std::vector<double> delta_cx{-0.15, 0, 0.15};   // rad
   std::vector<double> delta_cy{-0.15, 0, 0.15};   // rad
+  // Holds listed one by one, (omega1, omega2, delta_cx, delta_cy), after
+  // the grid's (a campaign planned hold by hold; empty speed lists: no grid).
+  std::vector<std::array<double, 4>> holds;
   bool steady_points = false;  // one averaged row per hold instead of a time series
   bool per_rotor = true;       // also log Z1, Z2, N1, N2
   // Noise standard deviation per load column [N, N m].
@@ -44,6 +48,22 @@ struct Excitation {
   double min_hz = 0.2, max_hz = 4.0;  // multisine band
   double period_s = 20.0;             // multisine period (frequency resolution 1/period)
   double pulse_s = 0.25;              // 3211 and doublet: unit pulse width
+  // Multisine shaped by frequency band (what `coaxid design` writes): when
+  // non-empty it replaces amplitude, min_hz and max_hz. Each band's
+  // harmonics of 1/period are dealt round-robin to the four channels; a
+  // channel's sines in a band share its rms there (rms over a period of that
+  // band's part of the signal: rad/s for rotor speeds, rad for angles), and
+  // its phases follow Schroeder's rule for its whole amplitude spectrum (a
+  // low crest factor).
+  struct Band {
+    double min_hz = 0, max_hz = 0;
+    std::map<std::string, double> rms;  // by input channel; a missing channel is 0
+  };
+  std::vector<Band> bands;
+  // Windows [from_s, to_s] in which the excitation is off (planned
+  // manoeuvres flown without it), faded out and in over quiet_ramp_s.
+  std::vector<std::array<double, 2>> quiet;
+  static constexpr double quiet_ramp_s = 0.5;
 };
 
 struct ControllerGains {

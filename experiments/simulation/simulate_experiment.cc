@@ -87,6 +87,7 @@ Log SimulateBalance(const Vehicle& truth, const BalanceScenario& s, uint64_t see
       }
     }
   }
+  for (const auto& h : s.holds) holds.push_back({h[0], h[1], h[2], h[3]});
   std::vector<std::string> loads = {"X", "Y", "Z", "L", "M", "N"};
   if (s.per_rotor) loads.insert(loads.end(), {"Z1", "Z2", "N1", "N2"});
 
@@ -133,7 +134,8 @@ Waypoint TargetAt(const std::vector<Waypoint>& waypoints, double t) {
 }  // namespace
 
 Log SimulateFlight(const Vehicle& truth, const FlightScenario& s, uint64_t seed,
-                   const IntegratorOptions& integrator_options) {
+                   const IntegratorOptions& integrator_options,
+                   std::vector<Eigen::VectorXd>* true_states) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   const Eigen::VectorXd theta = truth.parameters.Values();
@@ -164,8 +166,13 @@ Log SimulateFlight(const Vehicle& truth, const FlightScenario& s, uint64_t seed,
   // The commanded inputs as the truth's actuators apply them (servo, motor lags).
   const InputVector lag = truth.model.InputLags(theta.data());
   HeldInput held;
+  if (true_states) {
+    true_states->clear();
+    true_states->reserve(steps);
+  }
   for (int k = 0; k < steps; ++k) {
     const double t = k * dt;
+    if (true_states) true_states->push_back(x);
     // Noisy measurement of the state at t_k; the controller acts on it. The
     // truth's measurement effects (a gyro bias) come first: they do not
     // depend on the inputs.

@@ -4,6 +4,9 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include <nlohmann/json.hpp>
 
@@ -29,9 +32,11 @@ Log SimulateBalance(const Vehicle& truth, const BalanceScenario& scenario, uint6
 // Closed-loop flight from hover trim at the first waypoint, the controller
 // fed by noisy sensors, excitation added to its outputs. Throws
 // ComputationError if the integrator fails or the flight leaves the
-// near-hover envelope (attitude beyond 1 rad).
+// near-hover envelope (attitude beyond 1 rad). true_states (optional): the
+// true state at every row (what the sensors measured before their noise).
 Log SimulateFlight(const Vehicle& truth, const FlightScenario& scenario, uint64_t seed,
-                   const IntegratorOptions& integrator = {});
+                   const IntegratorOptions& integrator = {},
+                   std::vector<Eigen::VectorXd>* true_states = nullptr);
 
 // Dispatches on the scenario kind; adds metadata (vehicle, rate_hz, source).
 Log SimulateScenario(const Vehicle& truth, const Scenario& scenario,

@@ -651,6 +651,61 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   return result;
 }
 
+PredictedPrecision PredictOutputErrorPrecision(
+    const Vehicle& declared, const std::vector<EstimationLog>& logs,
+    const std::vector<std::vector<Eigen::VectorXd>>& true_states, const NoiseWeights& noise,
+    const OutputErrorOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("output-error options: " + why);
+  if (logs.empty() || true_states.size() != logs.size()) {
+    throw InputError("the predicted precision needs logs and a true state list per log");
+  }
+  for (size_t i = 0; i < logs.size(); ++i) {
+    if (logs[i].kind == LogKind::kFlight &&
+        static_cast<int>(true_states[i].size()) != logs[i].NumRows()) {
+      throw InputError(logs[i].source + ": needs the true state of every row");
+    }
+  }
+  Vehicle vehicle = declared;
+  StartAtPriors(options.priors, &vehicle.parameters);
+  PredictedPrecision out;
+  // No solve: the gauge's held member stays held, and the information is
+  // that of the others with it fixed, as a fit reports it.
+  out.gauge = FixScaleGauge(vehicle.model, logs, PriorNames(options.priors), options.scale_anchor,
+                            &vehicle.parameters);
+  out.parameters = vehicle.parameters;
+  const FreeParameters free(vehicle.parameters);
+  if (free.size() == 0) throw InputError("no parameter is marked estimated in the config");
+  out.names = free.names();
+  out.scales = free.scales();
+  Eigen::VectorXd theta_scaled = free.ScaledValues();
+  const Assembly a = Assemble(
+      vehicle, free, logs, noise, options.segment_schedule_s.back(), options, theta_scaled.data(),
+      [&](size_t log_index, int row) { return true_states[log_index][row]; });
+  OutputErrorInformation information = ComputeOutputErrorInformation(
+      ResidualBlocks(vehicle, logs, a), theta_scaled.data(), free.size(), false);
+  const ScaledPriorRows prior = PriorRows(options.priors, free.names(), free.scales());
+  information.information.noalias() += prior.A.transpose() * prior.A;
+  return WithInformation(out, information.information);
+}
+
+PredictedPrecision WithInformation(const PredictedPrecision& base,
+                                   const Eigen::MatrixXd& information_scaled) {
+  PredictedPrecision out = base;
+  out.information_scaled = information_scaled;
+  // The planned information is exact (no noise, no solve): only structural
+  // rank loss, at round-off level, is a direction the logs do not see. A fit
+  // works with 1e-10, where weak but real directions of a badly scaled
+  // problem can fall (the predicted std of those are still honest bounds).
+  out.identifiability =
+      AnalyzeIdentifiability(information_scaled, out.names, out.scales, /*relative_threshold=*/1e-14);
+  std::vector<int> free_indices;
+  for (const std::string& name : out.names) free_indices.push_back(out.parameters.Index(name));
+  out.ratios = ScaleFreeRatios(out.gauge, out.parameters, free_indices,
+                               out.identifiability.covariance);
+  return out;
+}
+
 nlohmann::json ParametersJson(const OutputErrorResult& result) {
   const IdentifiabilityReport& id = result.identifiability;
   nlohmann::json out = nlohmann::json::object();

@@ -154,6 +154,38 @@ struct OutputErrorResult {
 OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
                                  const OutputErrorOptions& options);
 
+// The precision an output-error fit would have on logs of a planned
+// experiment, before it is flown (experiment design): the Fisher information
+// of the same multiple-shooting problem (segments of the schedule's last
+// length, continuity residuals, balance blocks, priors, the scale gauge)
+// evaluated at the vehicle's parameter values with the segments started on
+// the true trajectory, weighted by the planned sensors' noise std. Its
+// inverse is the Cramér-Rao bound that a fit of such logs reports.
+struct PredictedPrecision {
+  ParameterSet parameters;                // the vehicle's, d marked held when the gauge holds it
+  ScaleGauge gauge;
+  std::vector<std::string> names;         // the free parameters
+  Eigen::VectorXd scales;                 // their scales (information coordinates value / scale)
+  Eigen::MatrixXd information_scaled;     // P x P, priors included
+  IdentifiabilityReport identifiability;  // predicted std, covariance, correlation
+  std::vector<ScaleFreeRatio> ratios;     // with their predicted std (no balance log)
+};
+
+// true_states[i]: the true state at every row of flight log i (empty for a
+// balance log). Throws InputError on logs that cannot be fitted and
+// ComputationError when the model cannot be simulated along them.
+PredictedPrecision PredictOutputErrorPrecision(
+    const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
+    const std::vector<std::vector<Eigen::VectorXd>>& true_states, const NoiseWeights& noise,
+    const OutputErrorOptions& options);
+
+// The same precision from information already computed (for example summed
+// over experiments that are fitted together, or with a planned experiment
+// added): identifiability and ratios of `base` recomputed for
+// information_scaled.
+PredictedPrecision WithInformation(const PredictedPrecision& base,
+                                   const Eigen::MatrixXd& information_scaled);
+
 // report.json "parameters" of a fit: {"name": {"value", "std", "estimated",
 // "unit"}} for every parameter; a parameter the data do not determine gets
 // "std": null and "identifiable": false, the one held for the scale is

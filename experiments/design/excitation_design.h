@@ -1,0 +1,103 @@
+// An identification excitation designed for the parameters a user names
+// (issue 16): a multisine shaped by frequency band, per input channel,
+// flown in closed loop, within the limits a pilot or safety officer sets.
+//
+// How: the information of an output-error fit is close to additive over
+// orthogonal excitation components, each adding in proportion to its power:
+//     M(t) = M_0 + sum_k t_k G_k,   t_k = (rms_k / probe_rms_k)^2,
+// M_0 the flight with no excitation (plus every other planned log), G_k the
+// information one probe flight adds with component k (channel c, band b)
+// alone. The flight's mean squares about trim grow the same way, so each
+// limit is linear in t: peak_j ~ crest_j sqrt(ms_j(0) + sum_k t_k v_jk).
+// The criterion (design_criterion.h) is convex in t, so the design is a
+// small convex problem, solved by a log-barrier Newton method. The design
+// found is then flown in the closed-loop simulation; where it leaves a
+// limit, the crest factors and the variance model are corrected from what
+// was flown and it is solved again. The result is judged by the precision
+// predicted along the flown design, not by the additive model.
+#pragma once
+
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "dynamics/vehicle.h"
+#include "experiments/design/design_criterion.h"
+#include "experiments/design/planned_experiment.h"
+#include "experiments/simulation/scenario.h"
+
+namespace coaxid {
+
+// Peaks over the whole flight (waypoint transients included). NaN: the
+// defaults, the planned flight's own attitude peak (the design flies no
+// further), 20 % of the hover trim speed, and 0.1 rad (half the model's
+// swashplate range), or the planned flight's peaks where larger.
+struct DesignLimits {
+  double max_attitude_rad = std::numeric_limits<double>::quiet_NaN();
+  double max_rotor_speed_deviation_rad_s = std::numeric_limits<double>::quiet_NaN();
+  double max_swashplate_rad = std::numeric_limits<double>::quiet_NaN();
+  nlohmann::json ToJson() const;
+};
+
+struct FrequencyBand {
+  double min_hz = 0, max_hz = 0;
+};
+
+struct ExcitationDesignOptions {
+  std::vector<FrequencyBand> bands{{0.1, 0.5}, {0.5, 1.5}, {1.5, 4.0}};
+  DesignLimits limits;
+  // The additive model aims at this share of each limit (the sensor noise
+  // the controller feeds back moves the peaks from flight to flight).
+  double margin = 0.9;
+  // The excitation is off from 0.5 s before each waypoint change to this
+  // long after it (0: always on): the controller's manoeuvre takes the
+  // attitude near its peak there, and the room left to the limit is what
+  // the excitation may use everywhere else.
+  double quiet_after_waypoint_s = 3.0;
+  int max_rounds = 6;  // local models made (each flies the design once per component)
+  OutputErrorOptions output_error;
+  std::function<void(const std::string&)> progress;
+};
+
+struct ExcitationDesign {
+  int flight_index = 0;                 // the designed scenario among the planned ones
+  std::vector<Scenario> reference, designed;
+  SimulatedExperiment reference_run, designed_run;
+  PredictedPrecision before, after;
+  double criterion_before = 0, criterion_after = 0;
+  DesignLimits limits;                  // as applied (NaN resolved)
+  struct Component {
+    std::string channel;
+    FrequencyBand band;
+    double probe_rms = 0, designed_rms = 0;
+  };
+  std::vector<Component> components;
+  struct Round {
+    double predicted_criterion = 0;  // by the additive model
+    double flown_criterion = 0;      // along the flown design
+    FlightEnvelope envelope;
+    bool within_limits = false;
+  };
+  std::vector<Round> rounds;
+  double seconds = 0;
+};
+
+// Designs the excitation of the first flight scenario of `scenarios`; the
+// others (a balance campaign, further flights) are planned as they are and
+// count in the joint precision. Throws InputError for a plan without a
+// flight, a limit the unexcited flight already exceeds, or a named
+// parameter the plan does not estimate; ComputationError when no flown
+// design stays within the limits.
+ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scenario>& scenarios,
+                                  const DesignCriterion& criterion,
+                                  const ExcitationDesignOptions& options);
+
+// The designed excitation's perturbation (omega1, omega2, delta_cx,
+// delta_cy) at every row of the flight: what a flight computer adds to its
+// controller's outputs.
+Log ExcitationTimeSeries(const FlightScenario& flight);
+
+}  // namespace coaxid
