@@ -31,6 +31,9 @@ DEFINE_double(max_rotor_speed_deviation_rad_s, -1,
 DEFINE_double(max_swashplate_rad, -1,
               "design: the largest swashplate angle, in flight and in balance holds (< 0: 0.1 "
               "rad or the planned flight's peak in flight, the campaign's largest in holds)");
+DEFINE_double(max_height_deviation_m, -1,
+              "design: the largest height off the waypoints' heights (< 0: 0.5 m, or the "
+              "planned flight's peak if larger)");
 DEFINE_string(design_bands, "0.1:0.5,0.5:1.5,1.5:4",
               "design: the multisine's frequency bands [Hz], LOW:HIGH,... (each input gets an rms "
               "per band)");
@@ -52,7 +55,7 @@ namespace {
 const char* const kDesignUsage =
     "usage: coaxid design --config=F --scenario=S[,S2...] --out=DIR [--design_parameters=Cz,sigma0]\n"
     "       [--criterion=D|A] [--max_attitude_rad=R] [--max_rotor_speed_deviation_rad_s=W]\n"
-    "       [--max_swashplate_rad=D] [--design_bands=0.1:0.5,0.5:1.5,1.5:4] [--add_holds=N]\n"
+    "       [--max_swashplate_rad=D] [--max_height_deviation_m=H] [--design_bands=0.1:0.5,0.5:1.5,1.5:4] [--add_holds=N]\n"
     "       [--design_excitation=false] [--quiet_after_waypoint_s=3] [--design_at=config|truth]\n";
 
 std::vector<FrequencyBand> ParseBands(const std::string& text) {
@@ -120,6 +123,7 @@ int RunDesign() {
   excitation_options.limits.max_rotor_speed_deviation_rad_s =
       LimitFlag(FLAGS_max_rotor_speed_deviation_rad_s);
   excitation_options.limits.max_swashplate_rad = LimitFlag(FLAGS_max_swashplate_rad);
+  excitation_options.limits.max_height_deviation_m = LimitFlag(FLAGS_max_height_deviation_m);
   if (FLAGS_max_swashplate_rad > 0.2) {
     throw InputError("--max_swashplate_rad: the model's swashplate range is +-0.2 rad (model.md)");
   }

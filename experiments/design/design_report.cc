@@ -374,13 +374,15 @@ std::string DesignMarkdown(const DesignRun& run, const std::vector<std::string>&
                   "| peak | limit | as planned | designed |\n|---|---|---|---|\n"
                   "| attitude [rad] | %.3g | %.3g | %.3g |\n"
                   "| rotor-speed deviation [rad/s] | %.3g | %.3g | %.3g |\n"
-                  "| swashplate angle [rad] | %.3g | %.3g | %.3g |\n\n",
+                  "| swashplate angle [rad] | %.3g | %.3g | %.3g |\n"
+                  "| height off the waypoints [m] | %.3g | %.3g | %.3g |\n\n",
                   d.reference[fi].name.c_str(), d.designed[fi].flight.duration_s,
                   d.criterion_before, d.criterion_after, d.rounds.size(), d.seconds,
                   d.limits.max_attitude_rad, a.max_attitude_rad, b.max_attitude_rad,
                   d.limits.max_rotor_speed_deviation_rad_s, a.max_rotor_speed_deviation_rad_s,
                   b.max_rotor_speed_deviation_rad_s, d.limits.max_swashplate_rad,
-                  a.max_swashplate_rad, b.max_swashplate_rad);
+                  a.max_swashplate_rad, b.max_swashplate_rad, d.limits.max_height_deviation_m,
+                  a.max_height_deviation_m, b.max_height_deviation_m);
     md += text;
     md += "| input | band [Hz] | designed rms |\n|---|---|---|\n";
     for (const auto& c : d.components) {

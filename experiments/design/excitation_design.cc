@@ -19,25 +19,32 @@ namespace coaxid {
 nlohmann::json DesignLimits::ToJson() const {
   return {{"max_attitude_rad", max_attitude_rad},
           {"max_rotor_speed_deviation_rad_s", max_rotor_speed_deviation_rad_s},
-          {"max_swashplate_rad", max_swashplate_rad}};
+          {"max_swashplate_rad", max_swashplate_rad},
+          {"max_height_deviation_m", max_height_deviation_m}};
 }
 
 namespace {
 
 constexpr const char* kInputs[4] = {"omega1", "omega2", "delta_cx", "delta_cy"};
-constexpr int kNumLimits = 3;  // attitude, rotor speed, swashplate
+constexpr int kNumLimits = 4;  // attitude, rotor speed, swashplate, height
 
 std::array<double, kNumLimits> Peaks(const FlightEnvelope& e) {
-  return {e.max_attitude_rad, e.max_rotor_speed_deviation_rad_s, e.max_swashplate_rad};
+  return {e.max_attitude_rad, e.max_rotor_speed_deviation_rad_s, e.max_swashplate_rad,
+          e.max_height_deviation_m};
+}
+std::array<double, kNumLimits> MeanSquares(const FlightEnvelope& e) {
+  return {e.ms_attitude, e.ms_rotor_speed, e.ms_swashplate, e.ms_height};
 }
 std::array<double, kNumLimits> LimitValues(const DesignLimits& l) {
-  return {l.max_attitude_rad, l.max_rotor_speed_deviation_rad_s, l.max_swashplate_rad};
+  return {l.max_attitude_rad, l.max_rotor_speed_deviation_rad_s, l.max_swashplate_rad,
+          l.max_height_deviation_m};
 }
 constexpr const char* kLimitNames[kNumLimits] = {"attitude", "rotor-speed deviation",
-                                                 "swashplate angle"};
+                                                 "swashplate angle", "height deviation"};
 constexpr const char* kLimitFlags[kNumLimits] = {"--max_attitude_rad",
                                                  "--max_rotor_speed_deviation_rad_s",
-                                                 "--max_swashplate_rad"};
+                                                 "--max_swashplate_rad",
+                                                 "--max_height_deviation_m"};
 
 // The plan with the designed flight's excitation replaced.
 std::vector<Scenario> WithExcitation(const std::vector<Scenario>& plan, int flight,
@@ -233,7 +240,7 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
         TrimHover(vehicle.model, vehicle.parameters.Values(), first.height, first.heading);
     const std::array<double, kNumLimits> defaults = {
         ref_peaks[0], std::max(ref_peaks[1], 0.1 * (trim.input[0] + trim.input[1])),
-        std::max(ref_peaks[2], 0.1)};
+        std::max(ref_peaks[2], 0.1), std::max(ref_peaks[3], 0.5)};
     for (int j = 0; j < kNumLimits; ++j) {
       if (std::isnan(given[j])) given[j] = defaults[j];
       if (!(given[j] > 0)) {
@@ -244,6 +251,7 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
     out.limits.max_attitude_rad = given[0];
     out.limits.max_rotor_speed_deviation_rad_s = given[1];
     out.limits.max_swashplate_rad = given[2];
+    out.limits.max_height_deviation_m = given[3];
   }
   const std::array<double, kNumLimits> limit = LimitValues(out.limits);
 
@@ -253,14 +261,16 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
   say("the flight without excitation");
   const Evaluation base = Evaluate(vehicle, WithExcitation(plan, fi, none), options.output_error);
   const std::array<double, kNumLimits> base_peak = Peaks(base.run.envelopes[fi]);
-  say(Format("without excitation: attitude %.3g rad, rotor speed %.3g rad/s, swashplate %.3g rad",
-             base_peak[0], base_peak[1], base_peak[2]));
+  const std::array<double, kNumLimits> base_ms = MeanSquares(base.run.envelopes[fi]);
+  say(Format("without excitation: attitude %.3g rad, rotor speed %.3g rad/s, swashplate %.3g rad, "
+             "height %.3g m",
+             base_peak[0], base_peak[1], base_peak[2], base_peak[3]));
   // What the design aims at: the peak without excitation plus a share of
   // the room to the limit (the sensor noise the controller feeds back moves
   // the peaks from flight to flight).
   std::array<double, kNumLimits> target;
   for (int j = 0; j < kNumLimits; ++j) {
-    target[j] = base_peak[j] + options.margin * (limit[j] - base_peak[j]);
+    target[j] = options.margin * limit[j];
     if (base_peak[j] >= limit[j]) {
       throw InputError(std::string("the flight without excitation already reaches its ") +
                        kLimitNames[j] + Format(" (%.4g against the limit %.4g): ", base_peak[j],
@@ -321,7 +331,7 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
     Evaluation flown;
     bool flew = false;
     double criterion = std::numeric_limits<double>::infinity();
-    std::array<double, kNumLimits> peak{};
+    std::array<double, kNumLimits> peak{}, ms{};
     bool within = false;
   };
   auto fly = [&](const Eigen::VectorXd& t) {
@@ -332,6 +342,7 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
       p.flew = true;
       p.criterion = objective.Value(p.flown.precision.information_scaled);
       p.peak = Peaks(p.flown.run.envelopes[fi]);
+      p.ms = MeanSquares(p.flown.run.envelopes[fi]);
       p.within = true;
       for (int j = 0; j < kNumLimits; ++j) p.within &= p.peak[j] <= limit[j];
     } catch (const ComputationError&) {
@@ -350,25 +361,41 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
                p.criterion, predicted, out.criterion_before) +
         (p.flew ? Format(", attitude %.3g rad (limit %.3g), rotor speed %.3g rad/s (%.3g)",
                          p.peak[0], limit[0], p.peak[1], limit[1]) +
-                      Format(", swashplate %.3g rad (%.3g)", p.peak[2], limit[2])
+                      Format(", swashplate %.3g rad (%.3g), height %.3g m (%.3g)", p.peak[2],
+                             limit[2], p.peak[3], limit[3])
                 : std::string(", the closed loop lost the vehicle")));
   };
 
-  // The start, scaled down until it keeps the limits.
-  Point current = fly(Eigen::VectorXd::Ones(K));
-  record(current, NAN);
-  for (int attempt = 0; attempt < 8 && !(current.flew && current.within); ++attempt) {
-    // The excitation's share of a peak grows about as the square root of its power.
-    double shrink = current.flew ? 1.0 : 0.25;
-    for (int j = 0; j < kNumLimits && current.flew; ++j) {
-      if (current.peak[j] > target[j]) {
-        shrink = std::min(shrink, std::max(0.05, std::pow((target[j] - base_peak[j]) /
-                                                          (current.peak[j] - base_peak[j]), 2)));
+  // A design's shape (how its power is shared among the components) is what
+  // the search decides; its size is then the largest the limits allow. Peaks
+  // the excitation makes grow about as the square root of its power: a
+  // design is flown, scaled by (target / peak)^2 of the tightest limit, and
+  // flown again (down when it leaves a limit, up when every peak has room),
+  // keeping the best flight within the limits.
+  auto fly_to_limits = [&](const Eigen::VectorXd& t, double predicted) {
+    Point best, p = fly(t);
+    record(p, predicted);
+    for (int attempt = 0; attempt < 4; ++attempt) {
+      if (p.flew && p.within && p.criterion < best.criterion) best = p;
+      double scale = p.flew ? std::numeric_limits<double>::infinity() : 0.25;
+      for (int j = 0; j < kNumLimits && p.flew; ++j) {
+        if (p.peak[j] > 0) scale = std::min(scale, std::pow(target[j] / p.peak[j], 2));
       }
+      const bool over = !(p.flew && p.within);
+      if (over) {
+        scale = std::clamp(scale, 0.05, 0.95);
+      } else if (scale > 1.3 && attempt == 0) {
+        scale = std::min(scale, 4.0);  // room left on every limit: larger
+      } else {
+        break;
+      }
+      p = fly(p.t * scale);
+      record(p, NAN);
     }
-    current = fly(current.t * shrink);
-    record(current, NAN);
-  }
+    if (p.flew && p.within && p.criterion < best.criterion) best = p;
+    return best.flew ? best : p;
+  };
+  Point current = fly_to_limits(Eigen::VectorXd::Ones(K), NAN);
   if (!(current.flew && current.within)) {
     throw ComputationError("even a weak multisine leaves the limits: the limits leave the "
                            "excitation almost no room (raise them, or plan gentler waypoints)");
@@ -378,7 +405,9 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
   // and the flight's mean squares as linear in each component's power
   // (one flight more per component), a convex step inside a trust region,
   // flown; kept when it is better and within the limits.
-  double rho = 4.0;  // each power may grow or shrink by this factor in a step
+  double rho = 16.0;  // each power may grow or shrink by this factor in a step
+  std::array<double, kNumLimits> crest;
+  crest.fill(3.0);  // a multisine's peak over its rms, before one is measured
   for (int iteration = 0; iteration < options.max_rounds && rho > 1.2; ++iteration) {
     const Eigen::MatrixXd& Mc = current.flown.precision.information_scaled;
     const Eigen::LLT<Eigen::MatrixXd> llt(Mc + 1e-12 * Mc.trace() *
@@ -387,7 +416,7 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
     const Eigen::MatrixXd L_inverse = L.triangularView<Eigen::Lower>().solve(
         Eigen::MatrixXd::Identity(Mc.rows(), Mc.rows()));
     std::vector<Eigen::MatrixXd> G(K);
-    Eigen::MatrixXd V(kNumLimits, K);  // d peak_j^2 / d t_k
+    Eigen::MatrixXd V(kNumLimits, K);  // d ms_j / d t_k: mean squares add up over components
     const double t_scale = std::max(current.t.maxCoeff(), 1e-6);
     for (int k = 0; k < K; ++k) {
       const double delta = std::max(0.5 * current.t[k], 0.05 * t_scale);
@@ -405,20 +434,24 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
       G[k] = L * PositivePart(L_inverse * (probe.flown.precision.information_scaled - Mc) *
                               L_inverse.transpose()) *
              L.transpose() / delta;
-      for (int j = 0; j < kNumLimits; ++j) {
-        V(j, k) = std::max(0.0, probe.peak[j] * probe.peak[j] - current.peak[j] * current.peak[j]) /
-                  delta;
-      }
+      for (int j = 0; j < kNumLimits; ++j) V(j, k) = std::max(0.0, probe.ms[j] - current.ms[j]) / delta;
     }
-    // Limits: peak_j^2 + V (t - t_c) <= target_j^2; the trust region as
-    // rows of the same polytope.
+    // Limits: outside the quiet windows a peak is the excitation's, its crest
+    // factor times the rms the excitation adds, crest_j^2 (ms_j - ms_j(0)) <=
+    // target_j^2 with ms_j = ms_j(t_c) + V (t - t_c), the crest factor from
+    // the current flight when the excitation makes its peak; the trust
+    // region as rows of the same polytope.
+    for (int j = 0; j < kNumLimits; ++j) {
+      const double excited = current.ms[j] - base_ms[j];
+      if (current.peak[j] > base_peak[j] && excited > 0) crest[j] = current.peak[j] / std::sqrt(excited);
+    }
     Eigen::MatrixXd A(kNumLimits + 2 * K, K);
     Eigen::VectorXd b(kNumLimits + 2 * K);
     A.setZero();
     for (int j = 0; j < kNumLimits; ++j) {
       A.row(j) = V.row(j);
-      b[j] = std::max(target[j] * target[j], current.peak[j] * current.peak[j] * (1 + 1e-9)) -
-             current.peak[j] * current.peak[j] + V.row(j).dot(current.t);
+      const double room = std::pow(target[j] / crest[j], 2) + base_ms[j] - current.ms[j];
+      b[j] = std::max(room, 1e-9 * std::max(current.ms[j], 1e-300)) + V.row(j).dot(current.t);
     }
     const double floor = 1e-4 * t_scale;
     for (int k = 0; k < K; ++k) {
@@ -444,20 +477,12 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
       continue;
     }
     const Eigen::VectorXd t_new = MinimiseOnPolytope(f, grad, A, b, t0);
-    Point next = fly(t_new);
-    record(next, f(t_new));
-    // A step that left a limit is flown again shorter (peaks are the local
-    // model's weakest part) before the local model is made anew.
-    for (double s = 0.5; s > 0.1 && !(next.flew && next.within); s *= 0.5) {
-      const Eigen::VectorXd t_short = current.t + s * (t_new - current.t);
-      next = fly(t_short);
-      record(next, f(t_short));
-    }
-    const double predicted = f(next.t);
+    const double predicted = f(t_new);
+    const Point next = fly_to_limits(t_new, predicted);
     if (next.flew && next.within && next.criterion < current.criterion) {
       const bool good = current.criterion - next.criterion > 0.5 * (current.criterion - predicted);
       current = next;
-      if (good) rho = std::min(2 * rho, 16.0);
+      if (good) rho = std::min(2 * rho, 64.0);
     } else {
       rho = std::sqrt(rho);
     }

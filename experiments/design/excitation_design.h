@@ -33,12 +33,14 @@ namespace coaxid {
 
 // Peaks over the whole flight (waypoint transients included). NaN: the
 // defaults, the planned flight's own attitude peak (the design flies no
-// further), 20 % of the hover trim speed, and 0.1 rad (half the model's
-// swashplate range), or the planned flight's peaks where larger.
+// further), 20 % of the hover trim speed, 0.1 rad (half the model's
+// swashplate range) and 0.5 m of height off the waypoints' (a lab's flight
+// volume), or the planned flight's peaks where larger.
 struct DesignLimits {
   double max_attitude_rad = std::numeric_limits<double>::quiet_NaN();
   double max_rotor_speed_deviation_rad_s = std::numeric_limits<double>::quiet_NaN();
   double max_swashplate_rad = std::numeric_limits<double>::quiet_NaN();
+  double max_height_deviation_m = std::numeric_limits<double>::quiet_NaN();
   nlohmann::json ToJson() const;
 };
 
@@ -57,7 +59,7 @@ struct ExcitationDesignOptions {
   // attitude near its peak there, and the room left to the limit is what
   // the excitation may use everywhere else.
   double quiet_after_waypoint_s = 3.0;
-  int max_rounds = 6;  // local models made (each flies the design once per component)
+  int max_rounds = 8;  // local models made (each flies the design once per component)
   OutputErrorOptions output_error;
   std::function<void(const std::string&)> progress;
 };

@@ -14,9 +14,11 @@ nlohmann::json FlightEnvelope::ToJson() const {
   return {{"max_attitude_rad", max_attitude_rad},
           {"max_rotor_speed_deviation_rad_s", max_rotor_speed_deviation_rad_s},
           {"max_swashplate_rad", max_swashplate_rad},
+          {"max_height_deviation_m", max_height_deviation_m},
           {"rms_attitude_rad", std::sqrt(ms_attitude)},
           {"rms_rotor_speed_deviation_rad_s", std::sqrt(ms_rotor_speed)},
-          {"rms_swashplate_rad", std::sqrt(ms_swashplate)}};
+          {"rms_swashplate_rad", std::sqrt(ms_swashplate)},
+          {"rms_height_deviation_m", std::sqrt(ms_height)}};
 }
 
 FlightEnvelope EnvelopeOf(const Vehicle& vehicle, const FlightScenario& flight, const Log& log,
@@ -28,6 +30,7 @@ FlightEnvelope EnvelopeOf(const Vehicle& vehicle, const FlightScenario& flight, 
   const std::vector<double>& w2 = log.Column("omega2");
   const std::vector<double>& dx = log.Column("delta_cx");
   const std::vector<double>& dy = log.Column("delta_cy");
+  const std::vector<double>& t = log.Column("t");
   FlightEnvelope e;
   const int n = log.NumRows();
   for (int k = 0; k < n; ++k) {
@@ -37,6 +40,13 @@ FlightEnvelope EnvelopeOf(const Vehicle& vehicle, const FlightScenario& flight, 
     e.max_rotor_speed_deviation_rad_s =
         std::max({e.max_rotor_speed_deviation_rad_s, std::fabs(d1), std::fabs(d2)});
     e.max_swashplate_rad = std::max({e.max_swashplate_rad, std::fabs(dx[k]), std::fabs(dy[k])});
+    double target_height = flight.waypoints.front().height;
+    for (const Waypoint& w : flight.waypoints) {
+      if (w.t_s <= t[k]) target_height = w.height;
+    }
+    const double dh = -x[kZ] - target_height;
+    e.max_height_deviation_m = std::max(e.max_height_deviation_m, std::fabs(dh));
+    e.ms_height += dh * dh / n;
     e.ms_attitude += (x[kPhi] * x[kPhi] + x[kTheta] * x[kTheta]) / (2.0 * n);
     e.ms_rotor_speed += (d1 * d1 + d2 * d2) / (2.0 * n);
     e.ms_swashplate += (dx[k] * dx[k] + dy[k] * dy[k]) / (2.0 * n);

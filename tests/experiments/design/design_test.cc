@@ -198,6 +198,7 @@ TEST(ExcitationDesign, KeepsTheLimitsAndImprovesOnThePlan) {
   EXPECT_LE(e.max_attitude_rad, 0.05);
   EXPECT_LE(e.max_rotor_speed_deviation_rad_s, design.limits.max_rotor_speed_deviation_rad_s);
   EXPECT_LE(e.max_swashplate_rad, design.limits.max_swashplate_rad);
+  EXPECT_LE(e.max_height_deviation_m, design.limits.max_height_deviation_m);
   EXPECT_LT(design.criterion_after, design.criterion_before);
   // The file, read back and flown, is the designed flight.
   const Scenario parsed =
