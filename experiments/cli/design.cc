@@ -83,13 +83,14 @@ std::vector<FrequencyBand> ParseBands(const std::string& text) {
 double LimitFlag(double value) { return value < 0 ? std::nan("") : value; }
 
 void PrintPrediction(const char* title, const PredictedPrecision& p) {
-  std::printf("%s\n  %-22s %12s %12s %9s\n", title, "parameter", "value", "std", "relative");
+  std::printf("%s\n  %-22s %12s %12s %9s %12s\n", title, "parameter", "value", "std", "relative",
+              "fit reports");
   const auto& id = p.identifiability;
   for (size_t k = 0; k < id.names.size(); ++k) {
     const double value = p.parameters.Value(id.names[k]);
     if (id.identifiable[k]) {
-      std::printf("  %-22s % .5e % .5e %8.3g%%\n", id.names[k].c_str(), value, id.std[k],
-                  100 * id.std[k] / std::fabs(value));
+      std::printf("  %-22s % .5e % .5e %8.3g%% %12.5e\n", id.names[k].c_str(), value, id.std[k],
+                  100 * id.std[k] / std::fabs(value), p.bound_std[k]);
     } else {
       std::printf("  %-22s % .5e %12s\n", id.names[k].c_str(), value, "not identifiable");
     }

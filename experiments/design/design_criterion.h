@@ -1,6 +1,7 @@
 // What an experiment design optimises: the precision of the parameters a
 // user names, in relative terms (std / |value|), so that parameters of any
-// unit weigh alike.
+// unit weigh alike, as the fit's information M gives it (the bound a fit
+// reports; output_error.h, PredictedPrecision).
 //   D-optimal (Ds on the named subset): log det of their relative covariance,
 //     the others estimated too (nuisance parameters);
 //   A-optimal: the sum of their relative variances.

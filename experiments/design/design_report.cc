@@ -1,6 +1,7 @@
 #include "experiments/design/design_report.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -52,20 +53,27 @@ std::vector<std::string> ParameterNames(const std::vector<const PredictedPrecisi
   return names;
 }
 
+// A number as the shortest text that reads back as the same double.
+YAML::Node ShortestNumber(double v) {
+  char text[32];
+  const auto [end, error] = std::to_chars(text, text + sizeof text, v);
+  return YAML::Node(std::string(text, end));
+}
+
 YAML::Node ExcitationNode(const Excitation& e) {
   YAML::Node node;
   node["type"] = "multisine";
-  node["start_s"] = e.start_s;
-  node["period_s"] = e.period_s;
+  node["start_s"] = ShortestNumber(e.start_s);
+  node["period_s"] = ShortestNumber(e.period_s);
   YAML::Node bands(YAML::NodeType::Sequence);
   for (const Excitation::Band& band : e.bands) {
     YAML::Node b;
-    b["min_hz"] = band.min_hz;
-    b["max_hz"] = band.max_hz;
+    b["min_hz"] = ShortestNumber(band.min_hz);
+    b["max_hz"] = ShortestNumber(band.max_hz);
     YAML::Node rms(YAML::NodeType::Map);
     for (const char* input : {"omega1", "omega2", "delta_cx", "delta_cy"}) {
       auto it = band.rms.find(input);
-      if (it != band.rms.end()) rms[input] = it->second;
+      if (it != band.rms.end()) rms[input] = ShortestNumber(it->second);
     }
     b["rms"] = rms;
     b.SetStyle(YAML::EmitterStyle::Flow);
@@ -76,8 +84,8 @@ YAML::Node ExcitationNode(const Excitation& e) {
     YAML::Node quiet(YAML::NodeType::Sequence);
     for (const auto& window : e.quiet) {
       YAML::Node w(YAML::NodeType::Sequence);
-      w.push_back(window[0]);
-      w.push_back(window[1]);
+      w.push_back(ShortestNumber(window[0]));
+      w.push_back(ShortestNumber(window[1]));
       w.SetStyle(YAML::EmitterStyle::Flow);
       quiet.push_back(w);
     }
@@ -88,7 +96,6 @@ YAML::Node ExcitationNode(const Excitation& e) {
 
 std::string Yaml(const YAML::Node& root, const std::string& header) {
   YAML::Emitter emitter;
-  emitter.SetDoublePrecision(17);  // read back, the same numbers
   emitter << root;
   return header + emitter.c_str() + "\n";
 }
@@ -228,6 +235,15 @@ std::vector<NamedFigure> Figures(const DesignRun& run) {
   return figures;
 }
 
+// How a design was made, for the scenario files' first line.
+std::string How(const DesignRun& run) {
+  std::string how = run.criterion.Name() + "-optimal for ";
+  const std::vector<std::string>& names =
+      run.criterion.parameters.empty() ? run.planned.names : run.criterion.parameters;
+  for (size_t i = 0; i < names.size(); ++i) how += (i ? "," : "") + names[i];
+  return how + " at the " + run.design_at + "'s values";
+}
+
 std::string CsvNumber(double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%.10g", v);
@@ -242,13 +258,18 @@ nlohmann::json PredictionJson(const PredictedPrecision& p) {
     const double value = p.parameters.Value(p.names[k]);
     const double s = StdOf(p, p.names[k]);
     nlohmann::json e = {{"value", value}, {"std", Number(s)},
-                        {"relative_std", Number(s / std::fabs(value))}};
+                        {"relative_std", Number(s / std::fabs(value))},
+                        {"fit_reports_std", Number(p.bound_std[k])}};
     if (!std::isfinite(s)) e["identifiable"] = false;
     parameters[p.names[k]] = e;
   }
   if (!p.gauge.held.empty()) parameters[p.gauge.held] = {{"value", p.parameters.Value(p.gauge.held)}};
   MarkHeldForTheScale(p.gauge, &parameters);
-  nlohmann::json out = {{"parameters", parameters},
+  nlohmann::json out = {{"std", "the predicted spread of output-error estimates over noise "
+                               "seeds, M^-1 D M^-1; fit_reports_std: the Cramér-Rao bound M^-1 "
+                               "a fit of such logs reports (its continuity residuals counted as "
+                               "measurements: larger)"},
+                        {"parameters", parameters},
                         {"identifiability", p.identifiability.ToJson()},
                         {"scale", p.gauge.ToJson()}};
   if (!p.ratios.empty()) out["ratios"] = RatiosJson(p.ratios);
@@ -425,7 +446,8 @@ std::string DesignMarkdown(const DesignRun& run, const std::vector<std::string>&
   return md;
 }
 
-std::string DesignedScenarioYaml(const std::string& original, const Scenario& designed) {
+std::string DesignedScenarioYaml(const std::string& original, const Scenario& designed,
+                                 const std::string& how) {
   YAML::Node root;
   const bool file = original != "balance" && original != "flight" && !original.empty();
   if (file) {
@@ -444,7 +466,7 @@ std::string DesignedScenarioYaml(const std::string& original, const Scenario& de
     YAML::Node holds(YAML::NodeType::Sequence);
     for (const auto& h : designed.balance.holds) {
       YAML::Node hold(YAML::NodeType::Sequence);
-      for (double v : h) hold.push_back(v);
+      for (double v : h) hold.push_back(ShortestNumber(v));
       hold.SetStyle(YAML::EmitterStyle::Flow);
       holds.push_back(hold);
     }
@@ -452,8 +474,9 @@ std::string DesignedScenarioYaml(const std::string& original, const Scenario& de
   }
   const std::string header =
       "# Designed by `coaxid design` from " + (file ? original : "the built-in '" + original + "'") +
-      (designed.kind == Scenario::Kind::kFlight ? ": the excitation is the design's.\n"
-                                                : ": the holds are the plan's and the design's.\n");
+      (designed.kind == Scenario::Kind::kFlight ? ": the excitation is the design's"
+                                                : ": the holds are the plan's and the design's") +
+      (how.empty() ? std::string() : " (" + how + ")") + ".\n";
   return Yaml(root, header);
 }
 
@@ -464,7 +487,7 @@ void WriteDesign(const DesignRun& run, const std::string& out) {
     const ExcitationDesign& d = *run.excitation;
     const int fi = d.flight_index;
     files.emplace_back("designed_" + d.reference[fi].name + ".yaml",
-                       DesignedScenarioYaml(run.scenario_paths[fi], d.designed[fi]));
+                       DesignedScenarioYaml(run.scenario_paths[fi], d.designed[fi], How(run)));
     const Log series = ExcitationTimeSeries(d.designed[fi].flight);
     std::string csv = "t,omega1,omega2,delta_cx,delta_cy\n";
     for (int k = 0; k < series.NumRows(); ++k) {
@@ -479,7 +502,7 @@ void WriteDesign(const DesignRun& run, const std::string& out) {
         b.new_campaign ? std::string() : run.scenario_paths[b.balance_index];
     files.emplace_back("designed_" + b.designed[b.balance_index].name + ".yaml",
                        DesignedScenarioYaml(original.empty() ? "balance" : original,
-                                            b.designed[b.balance_index]));
+                                            b.designed[b.balance_index], How(run)));
   }
   MakeOutputFolder(out);
   MakeOutputFolder(out + "/plots");

@@ -40,7 +40,9 @@ std::string DesignMarkdown(const DesignRun& run, const std::vector<std::string>&
 // The scenario file of a designed scenario: the original file (or a built-in
 // name's defaults) with its flight excitation or balance holds replaced by
 // the design's.
-std::string DesignedScenarioYaml(const std::string& original_path_or_name, const Scenario& designed);
+// how: one line on how it was designed (criterion, parameters), or empty.
+std::string DesignedScenarioYaml(const std::string& original_path_or_name, const Scenario& designed,
+                                 const std::string& how = "");
 
 // Writes everything into out (created); plots are skipped (with the reason
 // in the report) where gnuplot is missing.

@@ -35,6 +35,7 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
                                                      bool keep_flight_rows) {
   OutputErrorInformation out;
   Eigen::MatrixXd H_tt = Eigen::MatrixXd::Zero(P, P);
+  Eigen::MatrixXd balance = Eigen::MatrixXd::Zero(P, P);
   int n = 0;
   std::vector<std::vector<std::array<int, kNumStates>>> columns;
   for (const LogResidualBlocks& log : logs) columns.push_back(StateColumns(log, &n));
@@ -56,6 +57,7 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
                                "solution");
       }
       H_tt.noalias() += J.transpose() * J;
+      balance.noalias() += J.transpose() * J;
     }
     if (log.segments.empty()) continue;
     OutputErrorInformation::FlightRows& rows = out.flight[i];
@@ -115,6 +117,7 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
     }
   }
   out.information = H_tt;
+  out.balance_information = balance;
   if (n == 0) return out;
   Eigen::SparseMatrix<double> H(n, n);
   H.setFromTriplets(H_ss.begin(), H_ss.end());  // duplicates are summed
@@ -212,6 +215,8 @@ ColouredResidualCorrection CorrectForColouredResiduals(const OutputErrorInformat
 void RescaleParameters(const Eigen::VectorXd& factors, OutputErrorInformation* info) {
   const Eigen::VectorXd inverse = factors.cwiseInverse();
   info->information = inverse.asDiagonal() * info->information * inverse.asDiagonal();
+  info->balance_information =
+      inverse.asDiagonal() * info->balance_information * inverse.asDiagonal();
   for (OutputErrorInformation::FlightRows& rows : info->flight) {
     if (rows.sensitivities.cols() == inverse.size()) {
       rows.sensitivities = rows.sensitivities * inverse.asDiagonal();
@@ -225,10 +230,11 @@ void DropParameter(int k, OutputErrorInformation* info) {
     m->middleCols(k, n - k) = m->rightCols(n - k).eval();
     m->conservativeResize(Eigen::NoChange, n);
   };
-  Eigen::MatrixXd& M = info->information;
-  drop_column(&M);
-  M.transposeInPlace();
-  drop_column(&M);
+  for (Eigen::MatrixXd* M : {&info->information, &info->balance_information}) {
+    drop_column(M);
+    M->transposeInPlace();
+    drop_column(M);
+  }
   for (OutputErrorInformation::FlightRows& rows : info->flight) {
     if (rows.sensitivities.cols() > k) drop_column(&rows.sensitivities);
   }

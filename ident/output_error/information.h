@@ -47,6 +47,9 @@ struct LogResidualBlocks {
 
 struct OutputErrorInformation {
   Eigen::MatrixXd information;  // P x P, in scaled coordinates (value / scale)
+  // The balance logs' share of it (rows with measurement noise and no
+  // segment states).
+  Eigen::MatrixXd balance_information;
   // Per log (empty for balance logs), kept when asked for the correction.
   struct FlightRows {
     int num_channels = 0;

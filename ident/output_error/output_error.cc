@@ -682,23 +682,37 @@ PredictedPrecision PredictOutputErrorPrecision(
   const Assembly a = Assemble(
       vehicle, free, logs, noise, options.segment_schedule_s.back(), options, theta_scaled.data(),
       [&](size_t log_index, int row) { return true_states[log_index][row]; });
+  // The flight rows' marginalised sensitivities are kept for D.
   OutputErrorInformation information = ComputeOutputErrorInformation(
-      ResidualBlocks(vehicle, logs, a), theta_scaled.data(), free.size(), false);
+      ResidualBlocks(vehicle, logs, a), theta_scaled.data(), free.size(), true);
   const ScaledPriorRows prior = PriorRows(options.priors, free.names(), free.scales());
-  information.information.noalias() += prior.A.transpose() * prior.A;
-  return WithInformation(out, information.information);
+  const Eigen::MatrixXd prior_information = prior.A.transpose() * prior.A;
+  Eigen::MatrixXd measured = information.balance_information + prior_information;
+  for (const OutputErrorInformation::FlightRows& rows : information.flight) {
+    if (rows.num_channels > 0) measured.noalias() += rows.sensitivities.transpose() * rows.sensitivities;
+  }
+  return WithInformation(out, information.information + prior_information, measured);
 }
 
 PredictedPrecision WithInformation(const PredictedPrecision& base,
-                                   const Eigen::MatrixXd& information_scaled) {
+                                   const Eigen::MatrixXd& information_scaled,
+                                   const Eigen::MatrixXd& measured_scaled) {
   PredictedPrecision out = base;
   out.information_scaled = information_scaled;
+  out.measured_scaled = measured_scaled;
   // The planned information is exact (no noise, no solve): only structural
   // rank loss, at round-off level, is a direction the logs do not see. A fit
   // works with 1e-10, where weak but real directions of a badly scaled
   // problem can fall (the predicted std of those are still honest bounds).
   out.identifiability =
       AnalyzeIdentifiability(information_scaled, out.names, out.scales, /*relative_threshold=*/1e-14);
+  out.bound_std = out.identifiability.std;
+  // The spread: M^+ D M^+ on the identifiable subspace.
+  const Eigen::VectorXd inverse_scales = out.scales.cwiseInverse();
+  const Eigen::MatrixXd bound_scaled = inverse_scales.asDiagonal() *
+                                       out.identifiability.covariance * inverse_scales.asDiagonal();
+  out.identifiability.SetCovariance(out.scales.asDiagonal() * bound_scaled * measured_scaled *
+                                    bound_scaled * out.scales.asDiagonal());
   std::vector<int> free_indices;
   for (const std::string& name : out.names) free_indices.push_back(out.parameters.Index(name));
   out.ratios = ScaleFreeRatios(out.gauge, out.parameters, free_indices,

@@ -156,18 +156,28 @@ OutputErrorResult FitOutputError(const Vehicle& vehicle, const std::vector<Estim
 
 // The precision an output-error fit would have on logs of a planned
 // experiment, before it is flown (experiment design): the Fisher information
-// of the same multiple-shooting problem (segments of the schedule's last
+// M of the same multiple-shooting problem (segments of the schedule's last
 // length, continuity residuals, balance blocks, priors, the scale gauge)
 // evaluated at the vehicle's parameter values with the segments started on
-// the true trajectory, weighted by the planned sensors' noise std. Its
-// inverse is the Cramér-Rao bound that a fit of such logs reports.
+// the true trajectory, weighted by the planned sensors' noise std.
+//
+// M^-1 is the Cramér-Rao bound a fit of such logs reports. The fit's
+// continuity residuals enter M as if they were measurements of std
+// continuity_std, but no noise drives them: the spread of the estimates
+// over noise seeds is the sandwich M^-1 D M^-1, D the information of the
+// rows that do carry measurement noise (flight outputs with the segment
+// states marginalised, balance holds, priors). The bound is larger, most
+// for the parameters the segment states can stand in for (Cz from a
+// near-hover flight: 1.4x).
 struct PredictedPrecision {
   ParameterSet parameters;                // the vehicle's, d marked held when the gauge holds it
   ScaleGauge gauge;
   std::vector<std::string> names;         // the free parameters
   Eigen::VectorXd scales;                 // their scales (information coordinates value / scale)
-  Eigen::MatrixXd information_scaled;     // P x P, priors included
-  IdentifiabilityReport identifiability;  // predicted std, covariance, correlation
+  Eigen::MatrixXd information_scaled;     // M, P x P, priors included
+  Eigen::MatrixXd measured_scaled;        // D
+  IdentifiabilityReport identifiability;  // the predicted spread: std, covariance, correlation
+  Eigen::VectorXd bound_std;              // sqrt(diag M^-1), unscaled: what a fit reports
   std::vector<ScaleFreeRatio> ratios;     // with their predicted std (no balance log)
 };
 
@@ -179,12 +189,11 @@ PredictedPrecision PredictOutputErrorPrecision(
     const std::vector<std::vector<Eigen::VectorXd>>& true_states, const NoiseWeights& noise,
     const OutputErrorOptions& options);
 
-// The same precision from information already computed (for example summed
-// over experiments that are fitted together, or with a planned experiment
-// added): identifiability and ratios of `base` recomputed for
-// information_scaled.
+// The same precision from information already computed (M and D as above):
+// identifiability, bound and ratios of `base` recomputed.
 PredictedPrecision WithInformation(const PredictedPrecision& base,
-                                   const Eigen::MatrixXd& information_scaled);
+                                   const Eigen::MatrixXd& information_scaled,
+                                   const Eigen::MatrixXd& measured_scaled);
 
 // report.json "parameters" of a fit: {"name": {"value", "std", "estimated",
 // "unit"}} for every parameter; a parameter the data do not determine gets

@@ -41,7 +41,7 @@ PredictedPrecision FakePrecision(const Eigen::MatrixXd& information) {
   p.names.assign(free.names().begin(), free.names().begin() + information.rows());
   p.scales.resize(information.rows());  // scaled coordinates: value / |value| = +-1
   for (int k = 0; k < information.rows(); ++k) p.scales[k] = std::fabs(p.parameters.Value(p.names[k]));
-  return WithInformation(p, information);
+  return WithInformation(p, information, information);
 }
 
 TEST(DesignCriterion, GradientEqualsFiniteDifferences) {

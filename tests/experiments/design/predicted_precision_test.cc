@@ -40,7 +40,7 @@ OutputErrorOptions OneStage() {
 }
 
 // On noise-free logs a fit started at the truth stays there, and the bound
-// it reports is the predicted one: the same problem at the same point.
+// it reports is the predicted bound: the same problem at the same point.
 TEST(PredictedPrecision, IsTheBoundAFitReportsOnNoiseFreeLogs) {
   const Vehicle truth = RandomTruth(Nominal(), 11);
   const std::vector<Scenario> plan = ShortPlan(4.0, 0.4);
@@ -64,14 +64,14 @@ TEST(PredictedPrecision, IsTheBoundAFitReportsOnNoiseFreeLogs) {
   for (size_t k = 0; k < predicted.names.size(); ++k) {
     ASSERT_TRUE(predicted.identifiability.identifiable[k]) << predicted.names[k];
     // The fit moves the segment states by the integrator's error only.
-    EXPECT_NEAR(fit.identifiability.std[k] / predicted.identifiability.std[k], 1.0, 1e-3)
+    EXPECT_NEAR(fit.identifiability.std[k] / predicted.bound_std[k], 1.0, 1e-3)
         << predicted.names[k];
   }
 }
 
 // Over noise seeds, the spread of output-error estimates of the planned
-// experiment is the predicted std (the noise weights estimated from the
-// data, as a user's fit has them). 16 seeds: a sample std scatters by
+// experiment is the predicted std, M^-1 D M^-1 (the noise weights estimated
+// from the data, as a user's fit has them). 16 seeds: a sample std scatters by
 // 1/sqrt(2 * 15) = 18 % about the truth, so 1.65x either way is a 3-sigma
 // band for one parameter; a prediction off by 2x fails it.
 TEST(PredictedPrecision, MatchesTheSpreadOfFitsOverNoiseSeeds) {
