@@ -27,6 +27,7 @@ echo "## 1. Designed excitation (D-optimal for Cz, sigma0)" >&2
 for s in flight flight_truth_b; do
   "$coaxid" design --config="$config" --scenario="$scen/$s.yaml" --out="$dir/design_$s" \
     --design_parameters=Cz,sigma0 > "$dir/design_$s.log" 2>&1
+  # The first line names the scenario file as given; the rest must agree.
   if cmp -s <(tail -n +2 "$dir/design_$s/designed_$s.yaml") <(tail -n +2 "$scen/${s}_designed.yaml"); then
     echo "design of $s.yaml: the same as the shipped ${s}_designed.yaml" >&2
   else
@@ -51,9 +52,9 @@ for k in planned_a designed_a planned_b designed_b; do
   jq -r --arg k "$k" --slurpfile s "$dir/study_$k/summary.json" '
     .predicted.parameters | to_entries[] | select(.value.std != null) |
     .key as $n | ($s[0].points[0].methods.output_error.parameters[$n]) as $m |
-    "| \($k) | \($n) | \($m.truth | tostring | .[0:8]) | \(.value.std * 1000 | round / 1000 | tostring | .[0:0])\(.value.std) | \($m.spread) | \(($m.spread / .value.std) * 100 | round / 100) | \($m.mean_std) |"' \
+    "\($k) \($n) \($m.truth) \(.value.std) \($m.spread) \($m.mean_std)"' \
     "$dir/predicted_$k/design.json"
-done | awk -F'|' 'BEGIN{OFS="|"} {for(i=5;i<=6;i++) if ($i+0==$i) $i=sprintf(" %.3g ", $i); $8=sprintf(" %.3g ", $8); print}'
+done | awk '{printf "| %s | %s | %.3g | %.3g | %.3g | %.2f | %.3g |\n", $1, $2, $3, $4, $5, $5 / $4, $6}'
 
 echo
 echo "### Realised spread, planned against designed excitation (20 seeds each)"
