@@ -17,23 +17,6 @@ namespace {
 
 using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-std::vector<InputVector> PlannedHolds(const BalanceScenario& s) {
-  std::vector<InputVector> holds;
-  for (double w1 : s.omega1) {
-    for (double w2 : s.omega2) {
-      if (w2 == 0) {
-        holds.push_back({w1, w2, 0, 0});
-        continue;
-      }
-      for (double dx : s.delta_cx) {
-        for (double dy : s.delta_cy) holds.push_back({w1, w2, dx, dy});
-      }
-    }
-  }
-  for (const auto& h : s.holds) holds.push_back({h[0], h[1], h[2], h[3]});
-  return holds;
-}
-
 // Candidates: 0 and five speeds over the planned range per rotor; swashplate
 // angles -m, -m/2, 0, m/2, m on each axis where the lower rotor turns.
 std::vector<InputVector> CandidateHolds(const std::vector<InputVector>& planned, double hover_speed,
@@ -106,7 +89,7 @@ BalanceDesign DesignBalanceHolds(const Vehicle& vehicle, const std::vector<Scena
     campaign.balance.omega1.clear();
     campaign.balance.omega2.clear();
   }
-  const std::vector<InputVector> planned = PlannedHolds(campaign.balance);
+  const std::vector<InputVector> planned = BalanceHolds(campaign.balance);
   double max_delta = options.max_swashplate_rad;
   if (std::isnan(max_delta)) {
     max_delta = 0;

@@ -100,17 +100,25 @@ std::string Yaml(const YAML::Node& root, const std::string& header) {
   return header + emitter.c_str() + "\n";
 }
 
-std::vector<std::string> MarkdownPlanTable(const DesignRun& run) {
-  std::vector<const PredictedPrecision*> columns = {&run.planned};
-  std::vector<std::string> titles = {"as planned"};
+// The predictions to show side by side: as planned, then after each design.
+void PlanColumns(const DesignRun& run, std::vector<const PredictedPrecision*>* columns,
+                 std::vector<std::string>* titles) {
+  *columns = {&run.planned};
+  *titles = {"as planned"};
   if (run.excitation) {
-    columns.push_back(&run.excitation->after);
-    titles.push_back("designed excitation");
+    columns->push_back(&run.excitation->after);
+    titles->push_back("designed excitation");
   }
   if (run.balance) {
-    columns.push_back(&run.balance->after);
-    titles.push_back(run.excitation ? "excitation + holds" : "with the added holds");
+    columns->push_back(&run.balance->after);
+    titles->push_back(run.excitation ? "excitation + holds" : "with the added holds");
   }
+}
+
+std::vector<std::string> MarkdownPlanTable(const DesignRun& run) {
+  std::vector<const PredictedPrecision*> columns;
+  std::vector<std::string> titles;
+  PlanColumns(run, &columns, &titles);
   std::vector<std::string> lines;
   std::string header = "| parameter | value |", rule = "|---|---|";
   for (const std::string& t : titles) {
@@ -143,18 +151,11 @@ std::vector<std::string> MarkdownPlanTable(const DesignRun& run) {
 std::vector<NamedFigure> Figures(const DesignRun& run) {
   std::vector<NamedFigure> figures;
   {
-    std::vector<const PredictedPrecision*> columns = {&run.planned};
-    std::vector<std::string> titles = {"as planned"};
-    if (run.excitation) {
-      columns.push_back(&run.excitation->after);
-      titles.push_back("designed excitation");
-    }
-    if (run.balance) {
-      columns.push_back(&run.balance->after);
-      titles.push_back(run.excitation ? "excitation + holds" : "with the added holds");
-    }
+    std::vector<const PredictedPrecision*> columns;
+    std::vector<std::string> titles;
+    PlanColumns(run, &columns, &titles);
     PlotPanel panel;
-    panel.title = "predicted relative std (Cramér-Rao bound of an output-error fit)";
+    panel.title = "predicted relative std (spread of output-error estimates over noise seeds)";
     panel.y_label = "std / |value|";
     panel.log_y = true;
     panel.x_categories = ParameterNames(columns);

@@ -68,11 +68,7 @@ double NoiseStd(const std::map<std::string, double>& table, const std::string& c
 
 }  // namespace
 
-Log SimulateBalance(const Vehicle& truth, const BalanceScenario& s, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  const Eigen::VectorXd theta = truth.parameters.Values();
-
+std::vector<InputVector> BalanceHolds(const BalanceScenario& s) {
   // The staircase: every (omega1, omega2) pair; swashplate sweeps only where
   // the lower rotor turns (the swashplate tilts the lower rotor, eq. 7).
   std::vector<InputVector> holds;
@@ -88,6 +84,14 @@ Log SimulateBalance(const Vehicle& truth, const BalanceScenario& s, uint64_t see
     }
   }
   for (const auto& h : s.holds) holds.push_back({h[0], h[1], h[2], h[3]});
+  return holds;
+}
+
+Log SimulateBalance(const Vehicle& truth, const BalanceScenario& s, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const Eigen::VectorXd theta = truth.parameters.Values();
+  const std::vector<InputVector> holds = BalanceHolds(s);
   std::vector<std::string> loads = {"X", "Y", "Z", "L", "M", "N"};
   if (s.per_rotor) loads.insert(loads.end(), {"Z1", "Z2", "N1", "N2"});
 

@@ -25,6 +25,11 @@ Vehicle MakeTruthVehicle(const VehicleConfig& config, const Scenario& scenario);
 // the effects present with their parameters.
 nlohmann::json TruthJson(const Vehicle& truth);
 
+// The holds of a balance campaign, in the order it flies them: the grid's
+// (omega1 x omega2, swashplate sweeps where the lower rotor turns), then
+// those listed one by one.
+std::vector<InputVector> BalanceHolds(const BalanceScenario& scenario);
+
 // The paper's static experiment (sect. 3): staircase holds, balance loads of
 // eqs. 57-63 (plus effects) with additive Gaussian noise.
 Log SimulateBalance(const Vehicle& truth, const BalanceScenario& scenario, uint64_t seed);
