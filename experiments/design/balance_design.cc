@@ -155,11 +155,11 @@ BalanceDesign DesignBalanceHolds(const Vehicle& vehicle, const std::vector<Scena
   }
 
   // Greedy selection.
-  PredictedPrecision reference = plan.empty() ? PredictedPrecision{} : fixed;
-  if (plan.empty()) {
-    reference = PredictPrecision(vehicle, candidate_run, options.output_error);
-  }
-  const CriterionOnInformation objective(criterion, reference);
+  // The criterion's bookkeeping (names, scales) from the plan, or from the
+  // candidates' campaign when nothing else is planned.
+  const CriterionOnInformation objective(
+      criterion, plan.empty() ? PredictPrecision(vehicle, candidate_run, options.output_error)
+                              : fixed);
   Eigen::MatrixXd M = plan.empty() ? Eigen::MatrixXd::Zero(free.size(), free.size())
                                    : fixed.information_scaled;
   out.criterion_before = objective.Value(M);

@@ -41,7 +41,7 @@ struct BalanceDesign {
   bool new_campaign = false;         // the plan had none: one of the added holds alone
   std::vector<Scenario> designed;    // the plan with the holds added
   std::vector<InputVector> added;    // in the order chosen
-  std::vector<double> criterion_path;  // the criterion after each addition (additive model)
+  std::vector<double> criterion_path;  // the criterion after each addition (holds add information)
   int candidates = 0;
   PredictedPrecision before, after;
   double criterion_before = 0, criterion_after = 0;

@@ -303,7 +303,7 @@ nlohmann::json DesignJson(const DesignRun& run) {
       components.push_back({{"channel", c.channel},
                             {"min_hz", c.band.min_hz},
                             {"max_hz", c.band.max_hz},
-                            {"probe_rms", c.probe_rms},
+                            {"planned_rms", c.planned_rms},
                             {"designed_rms", c.designed_rms}});
     }
     nlohmann::json rounds = nlohmann::json::array();

@@ -2,19 +2,20 @@
 // (issue 16): a multisine shaped by frequency band, per input channel,
 // flown in closed loop, within the limits a pilot or safety officer sets.
 //
-// How: the information of an output-error fit is close to additive over
-// orthogonal excitation components, each adding in proportion to its power:
-//     M(t) = M_0 + sum_k t_k G_k,   t_k = (rms_k / probe_rms_k)^2,
-// M_0 the flight with no excitation (plus every other planned log), G_k the
-// information one probe flight adds with component k (channel c, band b)
-// alone. The flight's mean squares about trim grow the same way, so each
-// limit is linear in t: peak_j ~ crest_j sqrt(ms_j(0) + sum_k t_k v_jk).
-// The criterion (design_criterion.h) is convex in t, so the design is a
-// small convex problem, solved by a log-barrier Newton method. The design
-// found is then flown in the closed-loop simulation; where it leaves a
-// limit, the crest factors and the variance model are corrected from what
-// was flown and it is solved again. The result is judged by the precision
-// predicted along the flown design, not by the additive model.
+// How: the variables are the powers t_k of the components (input c, band
+// b; t = 1 is the planned excitation's power spread flat over the bands).
+// A design's shape is searched by local models: around the current design,
+// one closed-loop flight per component with more power in it gives the
+// information M and the flight's mean squares about trim as linear in t.
+// The criterion (design_criterion.h) is convex in t, so a step is a small
+// convex problem inside a trust region, solved by a log-barrier Newton
+// method. Each step is flown; its size is then set by the tightest limit
+// (peaks grow about as the square root of the power) and flown again,
+// keeping the best flight within the limits. A design is judged by the
+// precision predicted along its flown trajectory, never by a model of it.
+// (A global model additive over components, from one probe flight each,
+// was tried first and rejected: multiple-shooting information is not
+// additive, docs/design.md.)
 #pragma once
 
 #include <functional>
@@ -51,7 +52,7 @@ struct FrequencyBand {
 struct ExcitationDesignOptions {
   std::vector<FrequencyBand> bands{{0.1, 0.5}, {0.5, 1.5}, {1.5, 4.0}};
   DesignLimits limits;
-  // The additive model aims at this share of each limit (the sensor noise
+  // The design aims at this share of each limit (the sensor noise
   // the controller feeds back moves the peaks from flight to flight).
   double margin = 0.9;
   // The excitation is off from 0.5 s before each waypoint change to this
@@ -74,11 +75,12 @@ struct ExcitationDesign {
   struct Component {
     std::string channel;
     FrequencyBand band;
-    double probe_rms = 0, designed_rms = 0;
+    double planned_rms = 0;   // the planned excitation's power in this band (t = 1)
+    double designed_rms = 0;
   };
   std::vector<Component> components;
   struct Round {
-    double predicted_criterion = 0;  // by the additive model
+    double predicted_criterion = 0;  // by the local model (NaN: a start or resize flight)
     double flown_criterion = 0;      // along the flown design
     FlightEnvelope envelope;
     bool within_limits = false;

@@ -26,8 +26,8 @@ struct FlightEnvelope {
   double max_rotor_speed_deviation_rad_s = 0;  // the larger of |omega_i - trim|
   double max_swashplate_rad = 0;               // the larger of |delta_cx|, |delta_cy|
   double max_height_deviation_m = 0;           // |height - the waypoint's height in force|
-  // Mean squares about the trim of the same quantities (the design's
-  // variance model): phi^2 + theta^2 pooled as one, omega deviations,
+  // Mean squares about the trim of the same quantities (what the design's
+  // local models take as linear in the components' powers): phi^2 + theta^2 pooled as one, omega deviations,
   // deltas, height off the waypoints.
   double ms_attitude = 0, ms_rotor_speed = 0, ms_swashplate = 0, ms_height = 0;
   nlohmann::json ToJson() const;
