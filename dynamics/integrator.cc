@@ -17,6 +17,7 @@
 #include <utility>
 
 #include "core/errors.h"
+#include "dynamics/explicit_runge_kutta.h"
 
 namespace coaxid {
 
@@ -63,6 +64,11 @@ bool IntegratorOptions::IsValid(std::string* why) const {
   if (relative_tolerance >= 1.0) return fail("relative_tolerance must be < 1");
   if (max_steps_per_interval <= 0) return fail("max_steps_per_interval must be > 0");
   if (error_controlled_states < 0) return fail("error_controlled_states must be >= 0");
+  if (method == Method::kExplicitRungeKutta) {
+    if (newton) return fail("newton must be false for the explicit Runge-Kutta method");
+    if (max_order != 0) return fail("max_order must be 0 for the explicit Runge-Kutta method");
+    return true;
+  }
   const int order_limit = method == Method::kAdams ? 12 : 5;
   if (max_order < 0 || max_order > order_limit) {
     return fail("max_order must be in [0, " + std::to_string(order_limit) + "] for " +
@@ -102,6 +108,9 @@ struct Integrator::Impl {
   const int p;           // Parameter columns carried (0 unless wrt_parameters).
   const int state_cols;  // Initial-state columns carried (0 or n).
   const int ns;          // state_cols + p.
+
+  // Set for Method::kExplicitRungeKutta, which uses it instead of CVODES.
+  std::unique_ptr<ExplicitRungeKutta> erk;
 
   SUNContext context = nullptr;
   void* cvode = nullptr;
@@ -157,6 +166,16 @@ Integrator::Impl::Impl(const OdeSystem& system_in, const IntegratorOptions& opti
   auto check_ptr = [](const void* ptr, const char* what) {
     if (ptr == nullptr) throw ComputationError(std::string("Integrator: ") + what + " failed");
   };
+  if (options.method == IntegratorOptions::Method::kExplicitRungeKutta) {
+    if (ns > 0) {
+      throw InputError(
+          "Integrator: the explicit Runge-Kutta method carries no CVODES sensitivities; "
+          "integrate the variational equations as states (SensitivityMethod::"
+          "kVariationalEquations) or use Adams/BDF");
+    }
+    erk = std::make_unique<ExplicitRungeKutta>(system, options);
+    return;
+  }
   try {
     check(SUNContext_Create(nullptr, &context), "SUNContext_Create");
     cvode = CVodeCreate(options.method == IntegratorOptions::Method::kAdams ? CV_ADAMS : CV_BDF,
@@ -281,6 +300,16 @@ bool Integrator::Impl::Reset(double t0, const Eigen::VectorXd& x0, const Eigen::
   if (!std::isfinite(t0) || !x0.allFinite()) {
     return Fail("Integrator::Reset: non-finite t0 or x0");
   }
+  if (erk) {
+    std::string why;
+    if (!erk->Reset(t0, x0, &why)) return Fail(why);
+    t = t0;
+    fresh_start = true;
+    ready = true;
+    error.clear();
+    failure.clear();
+    return true;
+  }
   long steps = 0;
   CVodeGetNumSteps(cvode, &steps);
   completed_steps += steps;
@@ -334,6 +363,23 @@ bool Integrator::Impl::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd*
   callback_error.clear();
   // The concrete system may have changed its held input since the last call.
   cache_valid = false;
+  if (erk) {
+    // A one-step method needs no order ramp: the first step of an interval is the step the
+    // error controller proposed at the end of the previous one.
+    x->resize(n);
+    std::string why;
+    double next_step = 0.0;
+    const double first_step = fresh_start ? (options.initial_step_hint ? step_hint : 0.0) : -1.0;
+    if (!erk->AdvanceTo(t, t1, first_step, x->data(), &next_step, &why)) {
+      step_hint = 0.0;
+      return Fail(why);
+    }
+    if (options.initial_step_hint && next_step > 0.0) step_hint = next_step;
+    fresh_start = false;
+    t = t1;
+    if (S != nullptr) S->resize(n, 0);
+    return true;
+  }
 
   int flag = CVodeSetStopTime(cvode, t1);
   if (flag != CV_SUCCESS) {
@@ -507,6 +553,12 @@ double Integrator::time() const { return impl_->t; }
 
 Integrator::Stats Integrator::stats() const {
   Stats stats;
+  if (impl_->erk) {
+    stats.steps = impl_->erk->steps();
+    stats.rhs_evals = impl_->erk->rhs_evals();
+    stats.restarts = impl_->restarts;
+    return stats;
+  }
   long steps = 0;
   CVodeGetNumSteps(impl_->cvode, &steps);
   stats.steps = impl_->completed_steps + steps;

@@ -27,7 +27,12 @@
 namespace coaxid {
 
 struct IntegratorOptions {
-  enum class Method { kAdams, kBdf };
+  // kAdams, kBdf: CVODES's multistep methods (variable order). kExplicitRungeKutta: ARKODE's
+  // ERKStep with the Dormand-Prince 5(4) pair (dynamics/explicit_runge_kutta.h), a one-step
+  // method that loses nothing at the restarts every input change forces; it carries no
+  // CVODES sensitivities (integrate the variational equations as states instead,
+  // dynamics/variational_system.h) and takes no Newton iteration or max_order.
+  enum class Method { kAdams, kBdf, kExplicitRungeKutta };
   Method method = Method::kAdams;
   // Newton iteration with the dense Jacobian from OdeSystem::Jacobians; false = fixed-point
   // (functional) iteration, which needs no Jacobian and suits non-stiff models with Adams.

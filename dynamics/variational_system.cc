@@ -8,7 +8,9 @@ VariationalSystem::VariationalSystem(const OdeSystem& base, bool wrt_initial_sta
       n_(base.NumStates()),
       p_(wrt_parameters ? base.NumSensitivityParameters() : 0),
       state_columns_(wrt_initial_state ? base.NumStates() : 0),
-      columns_(state_columns_ + p_) {}
+      columns_(state_columns_ + p_),
+      dfdx_(Eigen::MatrixXd::Zero(n_, n_)),
+      dfdp_(Eigen::MatrixXd::Zero(n_, p_)) {}
 
 bool VariationalSystem::Rhs(double t, const double* z, double* zdot) const {
   if (!base_.Rhs(t, z, zdot)) return false;

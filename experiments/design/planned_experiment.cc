@@ -94,7 +94,8 @@ SimulatedExperiment SimulatePlannedExperiment(const Vehicle& vehicle,
     std::vector<Eigen::VectorXd> states;
     Log log;
     if (scenario.kind == Scenario::Kind::kFlight) {
-      log = SimulateFlight(vehicle, scenario.flight, scenario.seed, {}, &states);
+      log = SimulateFlight(vehicle, scenario.flight, scenario.seed, FlightSimulationIntegrator(),
+                          &states);
     } else {
       log = SimulateBalance(vehicle, scenario.balance, scenario.seed);
     }

@@ -137,6 +137,14 @@ Waypoint TargetAt(const std::vector<Waypoint>& waypoints, double t) {
 
 }  // namespace
 
+IntegratorOptions FlightSimulationIntegrator() {
+  IntegratorOptions options;
+  options.method = IntegratorOptions::Method::kExplicitRungeKutta;
+  options.relative_tolerance = 1e-7;
+  options.absolute_tolerance = 1e-9;
+  return options;
+}
+
 Log SimulateFlight(const Vehicle& truth, const FlightScenario& s, uint64_t seed,
                    const IntegratorOptions& integrator_options,
                    std::vector<Eigen::VectorXd>* true_states) {

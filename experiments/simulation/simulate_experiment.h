@@ -39,12 +39,19 @@ Log SimulateBalance(const Vehicle& truth, const BalanceScenario& scenario, uint6
 // ComputationError if the integrator fails or the flight leaves the
 // near-hover envelope (attitude beyond 1 rad). true_states (optional): the
 // true state at every row (what the sensors measured before their noise).
+// The integrator the flight simulations use unless told otherwise: the explicit Runge-Kutta
+// method at rtol 1e-7, atol 1e-9. The controller's zero-order hold restarts the integration
+// every sample; a one-step method loses nothing there, and a 60 s flight at 200 Hz takes about
+// half the time it takes with Adams at the same tolerances
+// (bench/experiments/simulation/flight_bench.cc).
+IntegratorOptions FlightSimulationIntegrator();
+
 Log SimulateFlight(const Vehicle& truth, const FlightScenario& scenario, uint64_t seed,
-                   const IntegratorOptions& integrator = {},
+                   const IntegratorOptions& integrator = FlightSimulationIntegrator(),
                    std::vector<Eigen::VectorXd>* true_states = nullptr);
 
 // Dispatches on the scenario kind; adds metadata (vehicle, rate_hz, source).
 Log SimulateScenario(const Vehicle& truth, const Scenario& scenario,
-                     const IntegratorOptions& integrator = {});
+                     const IntegratorOptions& integrator = FlightSimulationIntegrator());
 
 }  // namespace coaxid

@@ -84,13 +84,14 @@ struct OutputErrorOptions {
   int balance_rows_per_block = 512;
   // Ceres stopping rules. A relative cost change of 1e-7 is far below what one
   // standard deviation of any parameter changes the cost by (0.5 / cost).
-  double function_tolerance = 1e-7, parameter_tolerance = 1e-10, gradient_tolerance = 1e-12;
+  double function_tolerance = 1e-9, parameter_tolerance = 1e-10, gradient_tolerance = 1e-12;
   // Progress lines (iteration, cost, elapsed); nullptr for none. Library code
   // does not print: the CLI passes a function that writes to stderr.
   std::function<void(const std::string&)> progress;
 
   static IntegratorOptions DefaultIntegrator() {
     IntegratorOptions o;
+    o.method = IntegratorOptions::Method::kExplicitRungeKutta;
     o.relative_tolerance = 1e-7;
     o.absolute_tolerance = 1e-9;
     o.sensitivity_error_control = false;

@@ -1,4 +1,5 @@
-// Tests of the CVODES integrator (dynamics/integrator.h) and the RK4 reference (dynamics/rk4.h)
+// Tests of the integrator (dynamics/integrator.h: CVODES, and ARKODE's explicit Runge-Kutta)
+// and the RK4 reference (dynamics/rk4.h)
 // on systems with closed-form solutions and sensitivities.
 //
 // Tolerances. CVODE keeps the estimated local error of every step below the local tolerance
@@ -30,6 +31,7 @@
 #include "core/errors.h"
 #include "dynamics/ode_system.h"
 #include "dynamics/rk4.h"
+#include "dynamics/variational_system.h"
 
 namespace coaxid {
 namespace {
@@ -589,6 +591,135 @@ TEST(IntegratorOptionsTest, Validation) {
   bad.max_steps_per_interval = 0;
   EXPECT_FALSE(bad.IsValid(&why));
   const DampedOscillator system(4.0, 0.4);
+  EXPECT_THROW(Integrator(system, bad), InputError);
+}
+
+// The explicit Runge-Kutta back end (ARKODE ERKStep, Dormand-Prince 5(4)). Its error control is
+// the same local test as CVODE's, so the same kGlobalErrorFactor applies to uninterrupted runs.
+// Unlike a multistep method it keeps no history, so a restart costs no accuracy: restarted runs
+// are held to the uninterrupted bound, with no allowance per restart.
+IntegratorOptions ExplicitRungeKuttaOptions(double rtol = 1e-7, double atol = 1e-9) {
+  IntegratorOptions options;
+  options.method = IntegratorOptions::Method::kExplicitRungeKutta;
+  options.relative_tolerance = rtol;
+  options.absolute_tolerance = atol;
+  return options;
+}
+
+TEST(ExplicitRungeKuttaTest, OscillatorMatchesClosedFormWithoutARestartAllowance) {
+  const DampedOscillator system(4.0, 0.4);
+  const IntegratorOptions options = ExplicitRungeKuttaOptions();
+  const Eigen::Vector2d x0(1.0, -0.5);
+  // Scale |x| <= 2.
+  const double bound =
+      kGlobalErrorFactor * (options.relative_tolerance * 2.0 + options.absolute_tolerance);
+  Integrator once(system, options);
+  Eigen::VectorXd x;
+  ASSERT_TRUE(once.Reset(0.0, x0));
+  for (double t1 : {0.5, 3.0, 10.0}) {
+    ASSERT_TRUE(once.AdvanceTo(t1, &x)) << once.last_error();
+    EXPECT_LT((x - system.TransitionMatrix(t1) * x0).cwiseAbs().maxCoeff(), bound);
+  }
+  const int kRestarts = 2000;  // 5 ms intervals, as the logs' inputs
+  Integrator restarted(system, options);
+  x = x0;
+  for (int i = 0; i < kRestarts; ++i) {
+    ASSERT_TRUE(restarted.Reset(0.005 * i, x));
+    ASSERT_TRUE(restarted.AdvanceTo(0.005 * (i + 1), &x)) << restarted.last_error();
+  }
+  EXPECT_LT((x - system.TransitionMatrix(10.0) * x0).cwiseAbs().maxCoeff(), bound);
+  const Integrator::Stats stats = restarted.stats();
+  EXPECT_EQ(stats.restarts, kRestarts);
+  EXPECT_GE(stats.steps, kRestarts);
+  // The step learnt on one interval starts the next: one 7-stage step covers a 5 ms interval
+  // of this slow oscillator, so about 7-8 RHS calls per interval (a multistep restart at
+  // order 1 needs about twice that, bench/experiments/simulation/flight_bench.cc).
+  EXPECT_LE(stats.steps, kRestarts + 10);
+  EXPECT_LE(stats.rhs_evals, 9 * kRestarts);
+  EXPECT_EQ(stats.jac_evals, 0);
+}
+
+TEST(ExplicitRungeKuttaTest, VariationalSensitivitiesMatchClosedForm) {
+  // Sensitivities ride along as states (the error test on the first two only, as the output
+  // error and EKF propagators use it).
+  const DampedOscillator system(4.0, 0.4);
+  const VariationalSystem augmented(system, true, true);
+  IntegratorOptions options = ExplicitRungeKuttaOptions();
+  options.error_controlled_states = 2;
+  Integrator integrator(augmented, options);
+  const Eigen::Vector2d x0(1.0, -0.5);
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(augmented.NumStates());
+  z.head(2) = x0;
+  z[2] = 1.0;  // S0 = [I | 0], column-major after x
+  z[5] = 1.0;
+  for (int i = 0; i < 1000; ++i) {
+    ASSERT_TRUE(integrator.Reset(0.005 * i, z));
+    ASSERT_TRUE(integrator.AdvanceTo(0.005 * (i + 1), &z)) << integrator.last_error();
+  }
+  Eigen::Matrix<double, 2, 4> expected;
+  expected << system.TransitionMatrix(5.0), system.ParameterSensitivity(5.0, x0);
+  const Eigen::Map<const Eigen::Matrix<double, 2, 4>> S(z.data() + 2);
+  // Scale |S| <= 5; the sensitivities are not in the error test, but they follow the state's
+  // steps and solve a linear system of the same time scales, so the state's bound holds.
+  EXPECT_LT((S - expected).cwiseAbs().maxCoeff(),
+            kGlobalErrorFactor * (options.relative_tolerance * 5.0 + options.absolute_tolerance));
+}
+
+TEST(ExplicitRungeKuttaTest, ErrorShrinksWithToleranceAndStopTimeHolds) {
+  const DampedOscillator system(4.0, 0.4);
+  const Eigen::Vector2d x0(1.0, -0.5);
+  const Eigen::Vector2d exact = system.TransitionMatrix(10.0) * x0;
+  double errors[2];
+  const double rtols[2] = {1e-5, 1e-8};
+  for (int i = 0; i < 2; ++i) {
+    Integrator integrator(system, ExplicitRungeKuttaOptions(rtols[i], rtols[i] * 1e-2));
+    Eigen::VectorXd x;
+    ASSERT_TRUE(integrator.Reset(0.0, x0));
+    ASSERT_TRUE(integrator.AdvanceTo(10.0, &x));
+    errors[i] = (x - exact).cwiseAbs().maxCoeff();
+  }
+  EXPECT_LT(errors[1], errors[0] / 30.0) << errors[0] << " " << errors[1];
+
+  const StopTimeProbe probe;
+  Integrator integrator(probe, ExplicitRungeKuttaOptions());
+  Eigen::VectorXd x;
+  ASSERT_TRUE(integrator.Reset(0.0, Eigen::VectorXd::Zero(1)));
+  ASSERT_TRUE(integrator.AdvanceTo(1.0, &x)) << integrator.last_error();
+  EXPECT_LE(probe.max_t(), 1.0);
+  EXPECT_NEAR(x[0], 1.0, 1e-12);  // x' = 1 is integrated exactly
+}
+
+TEST(ExplicitRungeKuttaTest, FailuresSayWhyAndAResetRecovers) {
+  for (auto mode : {FailingOscillator::Mode::kRhsFalse, FailingOscillator::Mode::kRhsNan}) {
+    const FailingOscillator system(0.3, mode);
+    Integrator integrator(system, ExplicitRungeKuttaOptions());
+    Eigen::VectorXd x;
+    ASSERT_TRUE(integrator.Reset(0.0, Eigen::Vector2d(1.0, 0.0)));
+    ASSERT_TRUE(integrator.AdvanceTo(0.2, &x)) << integrator.last_error();
+    EXPECT_FALSE(integrator.AdvanceTo(1.0, &x));
+    const std::string expected =
+        mode == FailingOscillator::Mode::kRhsFalse ? "Rhs returned false" : "non-finite";
+    EXPECT_NE(integrator.last_error().find(expected), std::string::npos)
+        << integrator.last_error();
+    EXPECT_FALSE(integrator.AdvanceTo(2.0, &x));
+    EXPECT_NE(integrator.last_error().find("without Reset"), std::string::npos);
+    ASSERT_TRUE(integrator.Reset(0.0, Eigen::Vector2d(1.0, 0.0)));
+    EXPECT_TRUE(integrator.AdvanceTo(0.25, &x)) << integrator.last_error();
+  }
+}
+
+TEST(ExplicitRungeKuttaTest, CarriesNoCvodesSensitivitiesAndTakesNoNewtonOptions) {
+  const DampedOscillator system(4.0, 0.4);
+  EXPECT_THROW(Integrator(system, ExplicitRungeKuttaOptions(), {true, false}), InputError);
+  std::string why;
+  IntegratorOptions bad = ExplicitRungeKuttaOptions();
+  EXPECT_TRUE(bad.IsValid(&why));
+  bad.newton = true;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("newton"), std::string::npos);
+  bad = ExplicitRungeKuttaOptions();
+  bad.max_order = 5;
+  EXPECT_FALSE(bad.IsValid(&why));
   EXPECT_THROW(Integrator(system, bad), InputError);
 }
 

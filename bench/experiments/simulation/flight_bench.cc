@@ -23,16 +23,20 @@ void BM_ClosedLoopFlight60s(benchmark::State& state) {
   FlightScenario scenario;
   scenario.duration_s = 60;
   IntegratorOptions options;
-  options.method = state.range(0) ? IntegratorOptions::Method::kBdf
-                                  : IntegratorOptions::Method::kAdams;
-  options.newton = state.range(0) != 0;
+  // 0: Adams + fixed point, 1: BDF + Newton, 2: explicit Runge-Kutta (Dormand-Prince 5(4)).
+  const IntegratorOptions::Method methods[3] = {IntegratorOptions::Method::kAdams,
+                                                IntegratorOptions::Method::kBdf,
+                                                IntegratorOptions::Method::kExplicitRungeKutta};
+  options.method = methods[state.range(0)];
+  options.newton = state.range(0) == 1;
   options.relative_tolerance = std::pow(10.0, -static_cast<double>(state.range(1)));
   options.absolute_tolerance = options.relative_tolerance * 1e-2;
   for (auto _ : state) {
     Log log = SimulateFlight(Reference(), scenario, 1, options);
     benchmark::DoNotOptimize(log.values.data());
   }
-  state.SetLabel(std::string(state.range(0) ? "BDF+Newton" : "Adams+fixed-point") +
+  const char* names[3] = {"Adams+fixed-point", "BDF+Newton", "explicit RK 5(4)"};
+  state.SetLabel(std::string(names[state.range(0)]) +
                  ", rtol 1e-" + std::to_string(state.range(1)));
 }
 BENCHMARK(BM_ClosedLoopFlight60s)
@@ -40,6 +44,8 @@ BENCHMARK(BM_ClosedLoopFlight60s)
     ->Args({0, 6})
     ->Args({0, 5})
     ->Args({1, 7})
+    ->Args({2, 7})
+    ->Args({2, 6})
     ->Unit(benchmark::kMillisecond);
 
 void BM_ReplayOneSecond(benchmark::State& state) {
@@ -53,6 +59,7 @@ void BM_ReplayOneSecond(benchmark::State& state) {
   std::vector<int> unknowns;
   for (int i = kAlpha; i < kNumBaseParameters; ++i) unknowns.push_back(i);
   IntegratorOptions options;
+  if (state.range(3)) options.method = IntegratorOptions::Method::kExplicitRungeKutta;
   options.sensitivity_error_control = state.range(1) != 0;
   options.relative_tolerance = 1e-6;
   options.absolute_tolerance = 1e-8;
@@ -68,14 +75,17 @@ void BM_ReplayOneSecond(benchmark::State& state) {
   state.SetLabel(std::string(sens ? "with sensitivities (12 x0 + 12 parameters)" : "states only") +
                  (state.range(1) ? ", sensitivities in the error test" : "") +
                  (sens ? (state.range(2) ? ", variational equations" : ", CVODES") : "") +
+                 (state.range(3) ? ", explicit RK 5(4)" : ", Adams") +
                  ", rtol 1e-6");
 }
 BENCHMARK(BM_ReplayOneSecond)
-    ->Args({0, 0, 0})
-    ->Args({1, 1, 0})
-    ->Args({1, 0, 0})
-    ->Args({1, 1, 1})
-    ->Args({1, 0, 1})
+    ->Args({0, 0, 0, 0})
+    ->Args({1, 1, 0, 0})
+    ->Args({1, 0, 0, 0})
+    ->Args({1, 1, 1, 0})
+    ->Args({1, 0, 1, 0})
+    ->Args({0, 0, 0, 1})
+    ->Args({1, 0, 1, 1})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

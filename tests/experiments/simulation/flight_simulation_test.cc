@@ -1,7 +1,9 @@
 // Closed-loop flight: the controller holds the (open-loop unstable) hover for
 // 60 s under excitation and sensor noise, and the logged outputs are the
 // truth plus noise of the configured size.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <string>
 
@@ -55,6 +57,41 @@ TEST(FlightSimulation, ThreeTwoOneOneAndEffectsStayBounded) {
   for (const char* angle : {"phi", "theta"}) {
     for (double a : log.Column(angle)) ASSERT_LT(std::fabs(a), 0.3) << angle;
   }
+}
+
+// The default flight integrator (explicit Runge-Kutta, rtol 1e-7) against a reference run
+// of CVODE's Adams method at rtol 1e-12: the same closed-loop flight, the same noise draws.
+// Bound: the local tolerance is tol = 1e-7 |x| + 1e-9 with |x| <= 2 (height 1.5-1.8 m), and
+// the closed loop forgets an error within its slowest time constant, about 1 s = 200
+// intervals, so errors of at most 200 local tolerances accumulate: 4.0e-5. A method that
+// lost accuracy at every restart, or an interval stepped with the wrong input, would be off
+// by far more (one 5 ms interval of a wrong swashplate angle moves q by ~1e-4 rad/s). Adams
+// at rtol 1e-7 (the integrator it replaced) is held to the same bound.
+TEST(FlightSimulation, TheDefaultIntegratorMatchesATightReference) {
+  const Vehicle vehicle = ReferenceVehicle();
+  Scenario scenario = LoadScenario(std::string(COAXID_SOURCE_DIR) + "/configs/scenarios/flight.yaml");
+  scenario.flight.duration_s = 20;
+  const Vehicle truth = MakeTruthVehicle(vehicle.config, scenario);
+  IntegratorOptions reference;
+  reference.relative_tolerance = 1e-12;
+  reference.absolute_tolerance = 1e-14;
+  std::vector<Eigen::VectorXd> exact, fast, adams;
+  SimulateFlight(truth, scenario.flight, scenario.seed, reference, &exact);
+  SimulateFlight(truth, scenario.flight, scenario.seed, FlightSimulationIntegrator(), &fast);
+  IntegratorOptions adams_options;
+  adams_options.relative_tolerance = 1e-7;
+  adams_options.absolute_tolerance = 1e-9;
+  SimulateFlight(truth, scenario.flight, scenario.seed, adams_options, &adams);
+  ASSERT_EQ(fast.size(), exact.size());
+  double fast_error = 0.0, adams_error = 0.0;
+  for (size_t k = 0; k < exact.size(); ++k) {
+    fast_error = std::max(fast_error, (fast[k] - exact[k]).cwiseAbs().maxCoeff());
+    adams_error = std::max(adams_error, (adams[k] - exact[k]).cwiseAbs().maxCoeff());
+  }
+  std::printf("max state error vs the reference: explicit RK %.3g, Adams %.3g\n", fast_error,
+              adams_error);
+  EXPECT_LT(fast_error, 4.0e-5);
+  EXPECT_LT(adams_error, 4.0e-5);
 }
 
 // Noise-free sensors log the truth: the accelerometer equals the model's

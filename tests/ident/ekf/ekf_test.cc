@@ -48,31 +48,6 @@ struct SimulatedFlight {
   std::vector<State> truth_states;  // at every row
 };
 
-// The true states at every row, replayed with exactly the arithmetic of
-// SimulateFlight (same integrator and options, same times, same inputs, same
-// trim start): bit-identical to the simulation's own states.
-std::vector<State> ReplayTruth(const Vehicle& truth, const FlightScenario& s, const Log& log) {
-  const Eigen::VectorXd theta = truth.parameters.Values();
-  const Waypoint start = s.waypoints.front();
-  const HoverTrim trim = TrimHover(truth.model, theta, start.height, start.heading);
-  VehicleOde ode(truth.model, theta);
-  Integrator integrator(ode, IntegratorOptions{});
-  const InputHold inputs = InputHold::FromLog(log);
-  const double dt = 1.0 / s.rate_hz;
-  std::vector<State> states;
-  Eigen::VectorXd x = trim.state;
-  for (int k = 0; k < inputs.size(); ++k) {
-    states.push_back(x);
-    if (k + 1 == inputs.size()) break;
-    const double t = k * dt;
-    ode.SetInput(HeldInput::Steady(inputs.input(k), t));
-    Eigen::VectorXd next;
-    CHECK(integrator.Reset(t, x) && integrator.AdvanceTo(t + dt, &next));
-    x = next;
-  }
-  return states;
-}
-
 SimulatedFlight Simulate(double duration_s, uint64_t seed, double rate_hz = 200) {
   SimulatedFlight f;
   const VehicleConfig config = LoadVehicleConfig(Source("configs/glmav.yaml"));
@@ -82,9 +57,10 @@ SimulatedFlight Simulate(double duration_s, uint64_t seed, double rate_hz = 200)
   f.scenario = scenario.flight;
   f.scenario.duration_s = duration_s;
   f.scenario.rate_hz = rate_hz;
-  f.log = SimulateFlight(f.truth, f.scenario, seed);
+  std::vector<Eigen::VectorXd> states;  // the simulation's true state at every row
+  f.log = SimulateFlight(f.truth, f.scenario, seed, FlightSimulationIntegrator(), &states);
   f.log.source = "simulated";
-  f.truth_states = ReplayTruth(f.truth, f.scenario, f.log);
+  f.truth_states.assign(states.begin(), states.end());
   return f;
 }
 

@@ -1,0 +1,223 @@
+#include "dynamics/explicit_runge_kutta.h"
+
+#include <arkode/arkode_erkstep.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <sstream>
+
+#include "core/errors.h"
+#include "dynamics/integrator.h"
+#include "dynamics/serial_vector_ops.h"
+
+namespace coaxid {
+
+namespace {
+
+// ARKODE return codes for user callbacks: 0 success, > 0 recoverable (ARKODE retries with a
+// smaller step), < 0 unrecoverable.
+constexpr int kCallbackOk = 0;
+constexpr int kCallbackRecoverable = 1;
+constexpr int kCallbackFatal = -1;
+
+std::string Num(double value) {
+  std::ostringstream out;
+  out.precision(17);
+  out << value;
+  return out.str();
+}
+
+std::string FlagName(int flag) {
+  char* name = ERKStepGetReturnFlagName(flag);  // malloc'ed
+  std::string result = name != nullptr ? name : "ARK_UNKNOWN";
+  std::free(name);
+  return result;
+}
+
+}  // namespace
+
+struct ExplicitRungeKutta::Impl {
+  Impl(const OdeSystem& system_in, const IntegratorOptions& options);
+  ~Impl() { Release(); }
+  void Release();  // Frees all SUNDIALS memory; idempotent.
+
+  static int RhsCallback(double t, N_Vector y, N_Vector ydot, void* user_data);
+  static void ErrorCallback(int error_code, const char* module, const char* function, char* msg,
+                            void* user_data);
+  std::string Why(const std::string& what, int flag) const;
+  template <typename Check, typename CheckPtr>
+  void Allocate(const IntegratorOptions& options, Check check, CheckPtr check_ptr);
+
+  const OdeSystem& system;
+  const int n;
+  SUNContext context = nullptr;
+  void* arkode = nullptr;
+  N_Vector y = nullptr;
+  std::string arkode_message;   // Last message ARKODE passed to the error handler.
+  std::string callback_error;   // Why a callback failed (more specific than ARKODE's message).
+  long rhs_evals = 0;
+};
+
+ExplicitRungeKutta::Impl::Impl(const OdeSystem& system_in, const IntegratorOptions& options)
+    : system(system_in), n(system_in.NumStates()) {
+  auto check = [this](int flag, const char* what) {
+    if (flag != 0) throw ComputationError("ExplicitRungeKutta: " + Why(what, flag));
+  };
+  auto check_ptr = [](const void* ptr, const char* what) {
+    if (ptr == nullptr) {
+      throw ComputationError(std::string("ExplicitRungeKutta: ") + what + " failed");
+    }
+  };
+  try {
+    Allocate(options, check, check_ptr);
+  } catch (...) {
+    Release();  // The destructor does not run for an object whose constructor threw.
+    throw;
+  }
+}
+
+template <typename Check, typename CheckPtr>
+void ExplicitRungeKutta::Impl::Allocate(const IntegratorOptions& options, Check check,
+                                        CheckPtr check_ptr) {
+  check(SUNContext_Create(nullptr, &context), "SUNContext_Create");
+  y = N_VNew_Serial(n, context);
+  check_ptr(y, "N_VNew_Serial");
+  N_VConst(0.0, y);
+  check(N_VEnableFusedOps_Serial(y, SUNTRUE), "N_VEnableFusedOps_Serial");
+  if (options.optimized_vector_ops) UseOptimizedSerialOps(y);
+  arkode = ERKStepCreate(&Impl::RhsCallback, 0.0, y, context);
+  check_ptr(arkode, "ERKStepCreate");
+  check(ERKStepSetErrHandlerFn(arkode, &Impl::ErrorCallback, this), "ERKStepSetErrHandlerFn");
+  check(ERKStepSetUserData(arkode, this), "ERKStepSetUserData");
+  // Dormand-Prince 5(4): seven stages, first-same-as-last, the classical choice for non-stiff
+  // problems at tolerances of 1e-5 to 1e-9.
+  check(ERKStepSetTableNum(arkode, ARKODE_DORMAND_PRINCE_7_4_5), "ERKStepSetTableNum");
+  if (options.error_controlled_states > 0 && options.error_controlled_states < n) {
+    // As in integrator.cc: a huge absolute tolerance gives the other components a negligible
+    // error weight (not 1e300: squared weighted values would be subnormal).
+    N_Vector atol = N_VClone(y);
+    check_ptr(atol, "N_VClone");
+    double* a = N_VGetArrayPointer(atol);
+    for (int i = 0; i < n; ++i) {
+      a[i] = i < options.error_controlled_states ? options.absolute_tolerance : 1e100;
+    }
+    const int flag = ERKStepSVtolerances(arkode, options.relative_tolerance, atol);
+    N_VDestroy(atol);  // ARKODE keeps its own copy
+    check(flag, "ERKStepSVtolerances");
+  } else {
+    check(ERKStepSStolerances(arkode, options.relative_tolerance, options.absolute_tolerance),
+          "ERKStepSStolerances");
+  }
+  check(ERKStepSetMaxNumSteps(arkode, options.max_steps_per_interval), "ERKStepSetMaxNumSteps");
+  check(ERKStepSetMaxHnilWarns(arkode, -1), "ERKStepSetMaxHnilWarns");
+}
+
+void ExplicitRungeKutta::Impl::Release() {
+  if (arkode != nullptr) ERKStepFree(&arkode);
+  if (y != nullptr) N_VDestroy(y);
+  if (context != nullptr) SUNContext_Free(&context);
+  arkode = nullptr;
+  y = nullptr;
+  context = nullptr;
+}
+
+std::string ExplicitRungeKutta::Impl::Why(const std::string& what, int flag) const {
+  std::string message = what + " failed (" + FlagName(flag) + "): " + arkode_message;
+  if (!callback_error.empty()) message += " [" + callback_error + "]";
+  return message;
+}
+
+int ExplicitRungeKutta::Impl::RhsCallback(double t, N_Vector y, N_Vector ydot, void* user_data) {
+  Impl* self = static_cast<Impl*>(user_data);
+  ++self->rhs_evals;
+  double* xdot = N_VGetArrayPointer(ydot);
+  if (!self->system.Rhs(t, N_VGetArrayPointer(y), xdot)) {
+    self->callback_error = "OdeSystem::Rhs returned false at t = " + Num(t);
+    return kCallbackFatal;
+  }
+  for (int i = 0; i < self->n; ++i) {
+    if (!std::isfinite(xdot[i])) {
+      self->callback_error = "OdeSystem::Rhs returned a non-finite derivative at t = " + Num(t);
+      return kCallbackRecoverable;
+    }
+  }
+  return kCallbackOk;
+}
+
+void ExplicitRungeKutta::Impl::ErrorCallback(int error_code, const char* module,
+                                             const char* function, char* msg, void* user_data) {
+  if (error_code == ARK_WARNING) return;
+  Impl* self = static_cast<Impl*>(user_data);
+  self->arkode_message = std::string(module != nullptr ? module : "") +
+                         "::" + (function != nullptr ? function : "") + ": " +
+                         (msg != nullptr ? msg : "");
+}
+
+ExplicitRungeKutta::ExplicitRungeKutta(const OdeSystem& system, const IntegratorOptions& options)
+    : impl_(std::make_unique<Impl>(system, options)) {}
+
+ExplicitRungeKutta::~ExplicitRungeKutta() = default;
+
+bool ExplicitRungeKutta::Reset(double t0, const Eigen::VectorXd& x0, std::string* error) {
+  Impl& m = *impl_;
+  m.arkode_message.clear();
+  m.callback_error.clear();
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(m.y), m.n) = x0;
+  const int flag = ERKStepReset(m.arkode, t0, m.y);
+  if (flag != ARK_SUCCESS) {
+    *error = m.Why("ERKStepReset", flag);
+    return false;
+  }
+  return true;
+}
+
+bool ExplicitRungeKutta::AdvanceTo(double t, double t1, double first_step, double* x,
+                                   double* next_first_step, std::string* error) {
+  Impl& m = *impl_;
+  m.arkode_message.clear();
+  m.callback_error.clear();
+  int flag = ERKStepSetStopTime(m.arkode, t1);
+  if (flag != ARK_SUCCESS) {
+    *error = m.Why("ERKStepSetStopTime", flag);
+    return false;
+  }
+  if (first_step >= 0.0) {
+    double h0 = std::min(first_step, t1 - t);
+    // A step below round-off level of t would only fail: let ARKODE estimate instead.
+    if (h0 < 1e3 * std::numeric_limits<double>::epsilon() * std::max(std::abs(t), t1 - t)) {
+      h0 = 0.0;
+    }
+    flag = ERKStepSetInitStep(m.arkode, h0);
+    if (flag != ARK_SUCCESS) {
+      *error = m.Why("ERKStepSetInitStep", flag);
+      return false;
+    }
+  }
+  double tret = t;
+  flag = ERKStepEvolve(m.arkode, t1, m.y, &tret, ARK_NORMAL);
+  if (flag < 0) {
+    *error = m.Why("ARKODE ERKStep integrating from " + Num(t) + " to " + Num(t1), flag);
+    return false;
+  }
+  const double* y = N_VGetArrayPointer(m.y);
+  std::copy(y, y + m.n, x);
+  double h_next = 0.0;
+  if (next_first_step != nullptr && ERKStepGetCurrentStep(m.arkode, &h_next) == ARK_SUCCESS) {
+    *next_first_step = std::max(h_next, 0.0);
+  }
+  return true;
+}
+
+long ExplicitRungeKutta::steps() const {
+  long steps = 0;  // ARKODE's counter runs on across ERKStepReset.
+  ERKStepGetNumSteps(impl_->arkode, &steps);
+  return steps;
+}
+
+long ExplicitRungeKutta::rhs_evals() const { return impl_->rhs_evals; }
+
+}  // namespace coaxid
