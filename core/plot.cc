@@ -16,6 +16,7 @@
 
 #include "core/atomic_file.h"
 #include "core/errors.h"
+#include "core/report_values.h"
 
 namespace coaxid {
 namespace {
@@ -55,9 +56,7 @@ bool HasFinitePoint(const PlotSeries& s) {
 
 std::string FormatNumber(double v) {
   if (std::isnan(v)) return "NaN";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.9g", v);
-  return buffer;
+  return Significant(v, 9);
 }
 
 // Runs `gnuplot -e "outfile='OUT'; term='TERM'" SCRIPT` in `dir` (the script

@@ -1,5 +1,6 @@
 #include "core/report_values.h"
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -18,6 +19,15 @@ std::string NumberText(double v, const char* format) {
   char text[64];
   std::snprintf(text, sizeof text, format, v);
   return text;
+}
+
+char* WriteSignificant(char* out, double v, int digits) {
+  return std::to_chars(out, out + 32, v, std::chars_format::general, digits).ptr;
+}
+
+std::string Significant(double v, int digits) {
+  char text[32];
+  return std::string(text, WriteSignificant(text, v, digits));
 }
 
 }  // namespace coaxid

@@ -15,4 +15,11 @@ double JsonNumber(const nlohmann::json& object, const std::string& key);
 // v printed with the printf format; "-" when v is NaN or infinite.
 std::string NumberText(double v, const char* format = "%.4g");
 
+// v with `digits` significant digits: the text printf's "%.<digits>g" gives (std::to_chars in
+// general format, which the standard defines that way), written at `out`, which must hold 32
+// characters; returns the end of the text. Tables of long logs are written with it: snprintf
+// took 12 % of an EKF run on a 5-minute log.
+char* WriteSignificant(char* out, double v, int digits);
+std::string Significant(double v, int digits);
+
 }  // namespace coaxid

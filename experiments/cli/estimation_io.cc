@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "core/atomic_file.h"
+#include "core/report_values.h"
 #include "ident/baseline/balance_holds.h"
 
 namespace coaxid {
@@ -48,7 +49,7 @@ void WriteMeasuredVersusModelCsv(const std::string& path, const EstimationLog& l
     char number[32];
     auto append = [&](double value) {
       if (!std::isfinite(value)) return;
-      text.append(number, std::snprintf(number, sizeof number, "%.10g", value));
+      text.append(number, WriteSignificant(number, value, 10));
     };
     for (int k = 0; k < log.NumRows(); ++k) {
       append(log.inputs.time(k));

@@ -8,6 +8,7 @@
 
 #include "core/atomic_file.h"
 #include "core/errors.h"
+#include "core/report_values.h"
 #include "core/log.h"
 #include "core/plot.h"
 #include "core/report.h"
@@ -245,11 +246,7 @@ std::string How(const DesignRun& run) {
   return how + " at the " + run.design_at + "'s values";
 }
 
-std::string CsvNumber(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.10g", v);
-  return text;
-}
+std::string CsvNumber(double v) { return Significant(v, 10); }
 
 }  // namespace
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/report.h"
+#include "core/report_values.h"
 
 namespace coaxid {
 namespace {
@@ -17,9 +18,7 @@ json Number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 std::string Csv(double v) {
   if (std::isnan(v)) return "";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.10g", v);
-  return buffer;
+  return Significant(v, 10);
 }
 
 json ValueStd(double value, double std) { return {{"value", Number(value)}, {"std", Number(std)}}; }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/report_values.h"
 #include "dynamics/state.h"
 
 namespace coaxid {
@@ -11,9 +12,7 @@ namespace {
 
 std::string Csv(double v) {
   if (!std::isfinite(v)) return "";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.10g", v);
-  return buffer;
+  return Significant(v, 10);
 }
 
 }  // namespace
