@@ -11,7 +11,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/atomic_file.h"
@@ -235,62 +237,11 @@ std::string Data(const Figure& figure) {
   return d;
 }
 
-}  // namespace
-
-std::vector<std::string> RenderFigures(const std::vector<NamedFigure>& figures,
-                                       const std::string& folder, std::string* first_error) {
-  std::vector<std::string> made;
-  first_error->clear();
-  for (const NamedFigure& f : figures) {
-    std::string why;
-    if (RenderFigure(f.figure, folder + "/" + f.file, &why)) {
-      made.push_back(f.file);
-    } else if (first_error->empty()) {
-      *first_error = why;
-    }
-  }
-  return made;
-}
-
-bool GnuplotAvailable() {
-  const char* path = std::getenv("PATH");
-  if (path == nullptr) return false;
-  std::string paths = path;
-  size_t start = 0;
-  while (start <= paths.size()) {
-    const size_t colon = paths.find(':', start);
-    std::string dir =
-        paths.substr(start, colon == std::string::npos ? std::string::npos : colon - start);
-    if (dir.empty()) dir = ".";
-    if (::access((dir + "/gnuplot").c_str(), X_OK) == 0) return true;
-    if (colon == std::string::npos) break;
-    start = colon + 1;
-  }
-  return false;
-}
-
-bool RenderFigure(const Figure& figure, const std::string& png_path, std::string* error) {
-  std::string ignored;
-  if (error == nullptr) error = &ignored;
-  if (png_path.size() < 5 || png_path.substr(png_path.size() - 4) != ".png") {
-    *error = "plot path '" + png_path + "' does not end in .png";
-    return false;
-  }
-  if (!GnuplotAvailable()) {
-    *error = "gnuplot is not installed (no gnuplot on the PATH)";
-    return false;
-  }
-  const std::string dir = Directory(png_path);
-  const std::string png_name = BaseName(png_path);
-  const std::string stem = png_name.substr(0, png_name.size() - 4);
-  const std::string data_name = stem + ".dat";
-  try {
-    WriteFileAtomically(dir + "/" + data_name, Data(figure));
-    WriteFileAtomically(dir + "/" + stem + ".gp", Script(figure, data_name, png_name));
-  } catch (const InputError& e) {
-    *error = e.what();
-    return false;
-  }
+// The slow half of RenderFigure, after the data and script are written: runs gnuplot on
+// STEM.gp in dir and renames its image into place. Thread-safe (each call forks its own
+// gnuplot and touches only its own files).
+bool RunPreparedFigure(const std::string& dir, const std::string& stem,
+                       const std::string& png_path, std::string* error) {
   // gnuplot writes a temporary image renamed into place only on success: a
   // failed run leaves no broken PNG.
   const std::string tmp_name = "." + stem + ".tmp.png";
@@ -316,6 +267,130 @@ bool RenderFigure(const Figure& figure, const std::string& png_path, std::string
   ::unlink((dir + "/" + tmp_name).c_str());
   ::unlink(err_path.c_str());
   return ok;
+}
+
+// The fast half: checks the path and gnuplot, writes STEM.dat and STEM.gp. On success sets
+// *dir and *stem for RunPreparedFigure.
+bool PrepareFigure(const Figure& figure, const std::string& png_path, std::string* dir,
+                   std::string* stem, std::string* error) {
+  if (png_path.size() < 5 || png_path.substr(png_path.size() - 4) != ".png") {
+    *error = "plot path '" + png_path + "' does not end in .png";
+    return false;
+  }
+  if (!GnuplotAvailable()) {
+    *error = "gnuplot is not installed (no gnuplot on the PATH)";
+    return false;
+  }
+  *dir = Directory(png_path);
+  const std::string png_name = BaseName(png_path);
+  *stem = png_name.substr(0, png_name.size() - 4);
+  const std::string data_name = *stem + ".dat";
+  try {
+    WriteFileAtomically(*dir + "/" + data_name, Data(figure));
+    WriteFileAtomically(*dir + "/" + *stem + ".gp", Script(figure, data_name, png_name));
+  } catch (const InputError& e) {
+    *error = e.what();
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool GnuplotAvailable() {
+  const char* path = std::getenv("PATH");
+  if (path == nullptr) return false;
+  std::string paths = path;
+  size_t start = 0;
+  while (start <= paths.size()) {
+    const size_t colon = paths.find(':', start);
+    std::string dir =
+        paths.substr(start, colon == std::string::npos ? std::string::npos : colon - start);
+    if (dir.empty()) dir = ".";
+    if (::access((dir + "/gnuplot").c_str(), X_OK) == 0) return true;
+    if (colon == std::string::npos) break;
+    start = colon + 1;
+  }
+  return false;
+}
+
+bool RenderFigure(const Figure& figure, const std::string& png_path, std::string* error) {
+  std::string ignored;
+  if (error == nullptr) error = &ignored;
+  std::string dir, stem;
+  return PrepareFigure(figure, png_path, &dir, &stem, error) &&
+         RunPreparedFigure(dir, stem, png_path, error);
+}
+
+FigureRenderer::FigureRenderer(int parallel) {
+  if (parallel <= 0) parallel = static_cast<int>(std::thread::hardware_concurrency());
+  parallel = std::max(parallel, 1);
+  for (int i = 0; i < parallel; ++i) workers_.emplace_back([this] { Work(); });
+}
+
+FigureRenderer::~FigureRenderer() {
+  std::string ignored;
+  Finish(&ignored);
+}
+
+void FigureRenderer::Add(const Figure& figure, const std::string& png_path,
+                         const std::string& label) {
+  auto job = std::make_unique<Job>();
+  job->png_path = png_path;
+  job->label = label.empty() ? png_path : label;
+  const bool prepared = PrepareFigure(figure, png_path, &job->dir, &job->stem, &job->error);
+  std::lock_guard<std::mutex> lock(mutex_);
+  const int index = static_cast<int>(jobs_.size());
+  jobs_.push_back(std::move(job));
+  if (prepared) {
+    queue_.push_back(index);
+    ready_.notify_one();
+  }
+}
+
+void FigureRenderer::Work() {
+  for (;;) {
+    Job* job = nullptr;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      ready_.wait(lock, [this] { return closing_ || !queue_.empty(); });
+      if (queue_.empty()) return;  // closing, nothing left
+      job = jobs_[queue_.front()].get();
+      queue_.pop_front();
+    }
+    std::string error;
+    const bool ok = RunPreparedFigure(job->dir, job->stem, job->png_path, &error);
+    std::lock_guard<std::mutex> lock(mutex_);
+    job->ok = ok;
+    job->error = error;
+  }
+}
+
+std::vector<std::string> FigureRenderer::Finish(std::string* first_error) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    closing_ = true;
+  }
+  ready_.notify_all();
+  for (std::thread& worker : workers_) worker.join();
+  workers_.clear();
+  std::vector<std::string> made;
+  first_error->clear();
+  for (const auto& job : jobs_) {
+    if (job->ok) {
+      made.push_back(job->label);
+    } else if (first_error->empty()) {
+      *first_error = job->error;
+    }
+  }
+  return made;
+}
+
+std::vector<std::string> RenderFigures(const std::vector<NamedFigure>& figures,
+                                       const std::string& folder, std::string* first_error) {
+  FigureRenderer renderer;
+  for (const NamedFigure& f : figures) renderer.Add(f.figure, folder + "/" + f.file, f.file);
+  return renderer.Finish(first_error);
 }
 
 }  // namespace coaxid

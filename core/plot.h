@@ -8,8 +8,13 @@
 // notes "plots skipped" in its report) and leaves no half-made image behind.
 #pragma once
 
+#include <condition_variable>
+#include <deque>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace coaxid {
@@ -60,6 +65,37 @@ struct NamedFigure {
 // gets the reason the first failed one failed (empty when all were made).
 std::vector<std::string> RenderFigures(const std::vector<NamedFigure>& figures,
                                        const std::string& folder, std::string* first_error);
+
+// Renders figures with several gnuplot processes at once (gnuplot's start-up dominates a
+// figure: a run with 20 logs writes 42 figures). Add() writes the figure's data and script at
+// once, so the caller may drop the figure, and queues gnuplot; Finish() waits for all.
+class FigureRenderer {
+ public:
+  // parallel: gnuplot processes at once; 0: the machine's hardware threads.
+  explicit FigureRenderer(int parallel = 0);
+  ~FigureRenderer();  // Finish()es
+  FigureRenderer(const FigureRenderer&) = delete;
+  FigureRenderer& operator=(const FigureRenderer&) = delete;
+  // label: what Finish() lists for this figure when its image is made (e.g. the path
+  // relative to the report); empty: png_path.
+  void Add(const Figure& figure, const std::string& png_path, const std::string& label = "");
+  // Waits for every figure. Returns the labels of the images made, in the order added;
+  // *first_error gets why the first failed one failed (empty when all were made). Call once.
+  std::vector<std::string> Finish(std::string* first_error);
+
+ private:
+  struct Job {
+    std::string png_path, label, dir, stem, error;
+    bool ok = false;
+  };
+  void Work();
+  std::mutex mutex_;
+  std::condition_variable ready_;
+  std::vector<std::unique_ptr<Job>> jobs_;
+  std::deque<int> queue_;
+  std::vector<std::thread> workers_;
+  bool closing_ = false;
+};
 
 // True if a `gnuplot` executable is on the PATH.
 bool GnuplotAvailable();

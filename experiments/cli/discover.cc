@@ -280,15 +280,9 @@ int RunDiscover() {
   const std::string dir = FLAGS_out;
   MakeOutputFolder(dir + "/plots");
   WriteFileAtomically(dir + "/config.yaml", r.final.vehicle.ResolvedConfig());
-  std::vector<std::string> plots;
-  std::string plot_error;
+  FigureRenderer renderer;  // the figures are drawn side by side
   auto render = [&](const Figure& f, const std::string& name) {
-    std::string error;
-    if (RenderFigure(f, dir + "/plots/" + name + ".png", &error)) {
-      plots.push_back("plots/" + name + ".png");
-    } else if (plot_error.empty()) {
-      plot_error = error;
-    }
+    renderer.Add(f, dir + "/plots/" + name + ".png", "plots/" + name + ".png");
   };
   render(Autocorrelations(r), "residual_autocorrelation");
   render(Spectra(r), "residual_spectrum");
@@ -306,6 +300,8 @@ int RunDiscover() {
                                        {"final model", &r.final.validation_predictions[i], "red"}}),
            "validation_" + std::to_string(i + 1) + "_" + split.validation[i].name);
   }
+  std::string plot_error;
+  const std::vector<std::string> plots = renderer.Finish(&plot_error);
   nlohmann::json j = DiscoveryJson(r, options);
   nlohmann::json logs_json = nlohmann::json::array();
   for (const Log& log : logs) logs_json.push_back(log.source);

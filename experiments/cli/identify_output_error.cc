@@ -218,24 +218,22 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
   estimated.parameters = result.parameters;
   WriteFileAtomically(dir + "/config.yaml", estimated.ResolvedConfig());
   files.push_back("config.yaml");
+  // One figure per log and part, rendered side by side (many logs make many figures).
+  FigureRenderer renderer;
   auto emit = [&](const char* part, const std::vector<EstimationLog>& set,
                   const std::vector<Eigen::MatrixXd>& model) {
     for (size_t i = 0; i < set.size(); ++i) {
       const std::string name = unique(std::string(part) + "_" + set[i].name);
       WriteMeasuredVersusModelCsv(dir + "/" + name + ".csv", set[i], model[i]);
       files.push_back(name + ".csv");
-      std::string error;
-      if (RenderFigure(MeasuredVersusModelFigure(std::string(part) + ": " + set[i].source, set[i],
-                                           model[i]),
-                       dir + "/plots/" + name + ".png", &error)) {
-        plots.push_back("plots/" + name + ".png");
-      } else if (plot_error.empty()) {
-        plot_error = error;
-      }
+      renderer.Add(MeasuredVersusModelFigure(std::string(part) + ": " + set[i].source, set[i],
+                                             model[i]),
+                   dir + "/plots/" + name + ".png", "plots/" + name + ".png");
     }
   };
   emit("fit", split.estimation, result.predictions);
   emit("validation", split.validation, validation_predictions);
+  for (const std::string& plot : renderer.Finish(&plot_error)) plots.push_back(plot);
 
   nlohmann::json logs_json = nlohmann::json::array();
   for (const Log& log : logs) logs_json.push_back(log.source);

@@ -12,6 +12,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "core/atomic_file.h"
 
@@ -153,6 +154,39 @@ TEST_F(PlotTest, ReportsAGnuplotError) {
   EXPECT_FALSE(RenderFigure(f, (dir_ / "bad.png").string(), &error));
   EXPECT_NE(error.find("gnuplot failed"), std::string::npos) << error;
   EXPECT_FALSE(fs::exists(dir_ / "bad.png"));
+}
+
+// Several gnuplot runs at once: every good figure is made, listed in the
+// order added whatever order the runs finish in, and a bad one (a gnuplot
+// error, a wrong path) is left out with the first failure's reason.
+TEST_F(PlotTest, FigureRendererMakesEachFigureAndListsThemInOrder) {
+  if (!GnuplotAvailable()) GTEST_SKIP() << "gnuplot not installed";
+  FigureRenderer renderer(3);
+  Figure bad = TwoPanels();
+  bad.panels[0].series[0].style = "no_such_style";
+  std::vector<std::string> expected;
+  for (int i = 0; i < 7; ++i) {
+    const std::string name = "fig" + std::to_string(i) + ".png";
+    if (i == 2) {
+      renderer.Add(bad, (dir_ / name).string(), name);
+      continue;
+    }
+    if (i == 5) {
+      renderer.Add(TwoPanels(), (dir_ / "not_an_image.txt").string(), name);
+      continue;
+    }
+    renderer.Add(TwoPanels(), (dir_ / name).string(), name);
+    expected.push_back(name);
+  }
+  std::string first_error;
+  EXPECT_EQ(renderer.Finish(&first_error), expected);
+  EXPECT_NE(first_error.find("gnuplot failed"), std::string::npos) << first_error;
+  for (const std::string& name : expected) EXPECT_TRUE(fs::exists(dir_ / name)) << name;
+  EXPECT_FALSE(fs::exists(dir_ / "fig2.png"));
+  // Nothing half-made: no temporary image or error file left behind.
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_NE(entry.path().filename().string().front(), '.') << entry.path();
+  }
 }
 
 }  // namespace
