@@ -27,6 +27,7 @@ DECLARE_string(ekf_initial_report);
 DECLARE_double(ekf_process_noise);
 DECLARE_double(ekf_window_s);
 DECLARE_double(ekf_gate);
+DECLARE_int64(ekf_noise_adaptation_rows);
 DECLARE_int32(ekf_noise_adaptations);
 // identify --method=kinematic (experiments/cli/identify_kinematic.h).
 DECLARE_bool(kinematic_scale_factors);

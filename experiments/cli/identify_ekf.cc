@@ -41,7 +41,7 @@ constexpr const char* kUsage =
     "[--validate=C.csv] [--holdout_fraction=0.2] [--smoother=true] "
     "[--ekf_scale_anchor=d|none] [--ekf_transition=linearised|sensitivities] "
     "[--ekf_covariance_pass=true] [--ekf_process_noise=1] [--ekf_window_s=1] "
-    "[--ekf_noise_adaptations=1] [--ekf_gate=1e-6] [--ekf_initial_report=R.json] "
+    "[--ekf_noise_adaptations=1] [--ekf_noise_adaptation_rows=120000] [--ekf_gate=1e-6] [--ekf_initial_report=R.json] "
     "[--prior=R.json[:name,...]]";
 
 std::vector<Log> ReadFlightLogs(const std::vector<std::string>& paths, const char* flag) {
@@ -146,6 +146,11 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
                      std::to_string(FLAGS_ekf_noise_adaptations));
   }
   options.noise_adaptations = FLAGS_ekf_noise_adaptations;
+  if (FLAGS_ekf_noise_adaptation_rows < 0) {
+    throw InputError("--ekf_noise_adaptation_rows must be >= 0 (0: every row), got " +
+                     std::to_string(FLAGS_ekf_noise_adaptation_rows));
+  }
+  options.noise_adaptation_rows = FLAGS_ekf_noise_adaptation_rows;
   if (!(FLAGS_ekf_gate >= 0 && FLAGS_ekf_gate < 1)) {
     throw InputError("--ekf_gate must lie in [0, 1) (0: no innovation gate), got " +
                      NumberText(FLAGS_ekf_gate, "%g"));

@@ -117,6 +117,7 @@ bool EkfOptions::IsValid(std::string* why) const {
   if (noise_adaptations < 0 || noise_adaptations > 5) {
     return fail("noise_adaptations must lie in 0 .. 5");
   }
+  if (noise_adaptation_rows < 0) return fail("noise_adaptation_rows must be >= 0 (0: all)");
   return true;
 }
 
@@ -201,8 +202,11 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   problem.prior = prior_std.cwiseAbs2().asDiagonal();
   result.prior_covariance = problem.prior;
   for (int i = 0; i < kNumStates; ++i) problem.qx[i] = options.state_psd[i];
-  const int passes = (covariance_pass ? 2 : 1) + options.noise_adaptations;
-  problem.total_rows = rows_per_pass * passes;
+  const long adaptation_rows = options.noise_adaptation_rows > 0
+                                  ? std::min(rows_per_pass, options.noise_adaptation_rows)
+                                  : rows_per_pass;
+  problem.total_rows = rows_per_pass * (covariance_pass ? 2 : 1) +
+                       adaptation_rows * options.noise_adaptations;
   if (options.smoother) {
     problem.total_rows += SmootherRecomputedRows(rows_per_pass, options.smoother_block_rows);
   }
@@ -244,7 +248,8 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   record1.parameters = true;
   record1.innovations = true;
   for (int a = 0; a < options.noise_adaptations; ++a) {
-    const PassResult pass = RunPass(problem, p0, false, false, record1, history, &rows_done);
+    const PassResult pass = RunPass(problem, p0, false, false, record1, history, &rows_done,
+                                    adaptation_rows);
     if (!pass.ok) return failed(pass);
     add_effort(pass);
     // Mehra (1970): E[nu nu^T] = H P H^T + R, so R_ii = mean(nu_i^2 - (H P H^T)_ii)

@@ -144,6 +144,11 @@ struct EkfOptions {
   // moves between samples (the yaw rate by 2x in variance on the shipped
   // flight), which makes every std too large and the NIS too small.
   int noise_adaptations = 0;
+  // Rows (of the chained logs, from the first) each noise-adaptation pass runs over; 0: all.
+  // 120,000 rows (10 minutes at 200 Hz) give each channel's variance to ~0.4 % (1/sqrt(n/2)),
+  // far below what moves an estimate, and spare a long log most of a pass (an hour at 200 Hz:
+  // 11 s of the EKF's 60 s).
+  long noise_adaptation_rows = 120000;
   bool smoother = true;
   // Rows per block of the smoother's checkpoints (ekf/pass.h): the forward
   // pass keeps the filter state every this many rows and the backward pass
@@ -188,11 +193,15 @@ struct EkfOptions {
 
   // rtol 1e-5: the integration error per 5 ms interval (~1e-6 m/s, 1e-7 rad/s)
   // is two orders below the process noise per interval (sqrt(q dt) ~ 2e-4).
-  // Measured on a simulated 60 s flight: 1e-6 costs 10 % more propagation
-  // time for a log-likelihood change of 0.1; 1e-4 saves 25 % but changes it
-  // by 7.
+  // Measured on a simulated 60 s flight with CVODE's Adams: 1e-6 costs 10 %
+  // more propagation time for a log-likelihood change of 0.1; 1e-4 saves 25 %
+  // but changes it by 7. ARKODE's explicit Runge-Kutta: one step covers an
+  // interval, more accurate than Adams at the same tolerances
+  // (dynamics/integrator.h), and 15 % less time a propagated interval
+  // (bench/ident/ekf/ekf_bench.cc).
   static IntegratorOptions DefaultIntegrator() {
     IntegratorOptions o;
+    o.method = IntegratorOptions::Method::kExplicitRungeKutta;
     o.relative_tolerance = 1e-5;
     o.absolute_tolerance = 1e-7;
     o.sensitivity_error_control = false;

@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <future>
+#include <memory>
+#include <thread>
 #include <utility>
 
 #include "ident/ekf/rts_smoother.h"
@@ -49,7 +52,9 @@ long SmootherRecomputedRows(long rows, long option) {
 }
 
 PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool freeze, bool smooth,
-                   const EkfPassRecord& rec, EkfHistorySink* history, long* rows_done) {
+                   const EkfPassRecord& rec, EkfHistorySink* history, long* rows_done,
+                   long max_rows) {
+  CHECK(!(smooth && max_rows > 0)) << "RunPass: a smoothed pass runs over every row";
   const EkfOptions& options = pb.options;
   const int np = pb.free.size();
   const int n = kNumStates + np;
@@ -90,7 +95,7 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
   };
 
   long step = 0;
-  for (size_t L = 0; L < pb.logs.size(); ++L) {
+  for (size_t L = 0; L < pb.logs.size() && !(max_rows > 0 && step >= max_rows); ++L) {
     const EstimationLog& log = pb.logs[L];
     const int N = log.NumRows();
     auto record = [&](int row) {
@@ -112,7 +117,7 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
       if (rec.parameters) history->Parameters(l, row, z.tail(np).cwiseProduct(scales), p_std);
       if (rec.std_at_estimate) history->ParameterStdAtEstimate(l, row, p_std);
     };
-    for (int k = 0; k < N; ++k, ++step) {
+    for (int k = 0; k < N && !(max_rows > 0 && step >= max_rows); ++k, ++step) {
       const Clock::time_point c0 = Clock::now();
       if (!filter.Predict(static_cast<int>(L), k)) return fail();
       const Clock::time_point c1 = Clock::now();
@@ -146,38 +151,94 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
   }
   out.z = filter.state().z;
   out.P = filter.state().P;
+  EkfPropagator::Counters recompute_counters;
+  Integrator::Stats recompute_integrator;
   if (smooth) {
     const Clock::time_point c0 = Clock::now();
     CHECK_EQ(static_cast<long>(checkpoints.size()), blocks);
+    // Every block but the last is recomputed from its checkpoint, storing its transitions,
+    // and smoothed backwards from the later block's first step. The recomputations are
+    // independent: `workers` filters run them side by side on their own threads, each into its
+    // own store, a few blocks ahead of the backward pass on this thread (the backward pass
+    // is the cheap part). The forward pass filled the last block's store.
+    const int workers =
+        std::max(1, std::min(static_cast<int>(std::thread::hardware_concurrency()), 4));
+    std::vector<std::unique_ptr<EkfFilter>> filters;
+    std::vector<std::unique_ptr<RtsSmoother>> owned;
+    std::vector<RtsSmoother*> stores = {&smoother};
+    for (int w = 0; w < workers; ++w) {
+      filters.push_back(std::make_unique<EkfFilter>(pb, p_start, freeze));
+      owned.push_back(std::make_unique<RtsSmoother>(n));
+      owned.back()->Reserve(static_cast<int>(std::min(block, steps - 1)));
+      stores.push_back(owned.back().get());
+    }
+    auto block_rows = [&](long b) {
+      const long first = b * block;
+      const long count = std::min(first + block, steps - 1) - first;
+      return StepRows(pb.logs, checkpoints[b].log, checkpoints[b].row, count);
+    };
+    struct Failure {
+      std::string why;
+      double time = 0;
+    };
+    // Fills *store with block b's transitions; an empty why, or why the filter failed there.
+    auto recompute_block = [&](long b, EkfFilter* again, RtsSmoother* store) -> Failure {
+      const std::vector<std::pair<int, int>> rows = block_rows(b);
+      again->Restore(checkpoints[b]);
+      store->Clear();
+      std::string error;
+      for (size_t j = 1; j < rows.size(); ++j) {
+        const auto [L, row] = rows[j];
+        bool ok = again->Predict(L, row);
+        if (ok && !store->AddTransition(again->state().z, again->state().P, again->Phi(),
+                                        again->predicted_z(), again->predicted_P(), &error)) {
+          ok = again->Fail(pb.logs[L].inputs.time(row), L, row, error);
+        }
+        if (!ok || !again->Update(nullptr)) return {again->failure(), again->failure_time()};
+      }
+      const EkfFilterState& end = checkpoints[b + 1];
+      CHECK(again->state().z == end.z && again->state().P == end.P)
+          << "EKF smoother: the recomputed rows up to row " << end.row << " of log " << end.log
+          << " differ from the forward pass (a filter state not in the checkpoint)";
+      return {};
+    };
+    // Block i from the end (i = 0: the last) uses store i % (workers + 1) and, from i = 1,
+    // filter i % workers.
+    std::vector<std::future<Failure>> pending(workers + 1);
+    auto launch = [&](long i) {
+      if (i >= blocks) return;
+      pending[i % (workers + 1)] =
+          std::async(std::launch::async, recompute_block, blocks - 1 - i,
+                     filters[i % workers].get(), stores[i % (workers + 1)]);
+    };
+    for (long i = 1; i <= workers; ++i) launch(i);
     // Smoothed x, P at the first step of the later block (at the end: the filtered ones).
     Eigen::VectorXd x_next = out.z;
     Eigen::MatrixXd P_next = out.P;
-    for (long b = blocks - 1; b >= 0; --b) {
-      const long first = b * block;
-      const long count = std::min(first + block, steps - 1) - first;
-      const EkfFilterState& start = checkpoints[b];
-      const std::vector<std::pair<int, int>> rows = StepRows(pb.logs, start.log, start.row, count);
-      if (b < blocks - 1) {
-        // This block again from its checkpoint, storing its transitions.
-        filter.Restore(start);
-        smoother.Clear();
-        for (long j = 1; j <= count; ++j) {
-          const auto [L, row] = rows[j];
-          if (!filter.Predict(L, row) || !add_transition(L, row) || !filter.Update(nullptr)) {
-            return fail();
-          }
-          ++*rows_done;
-          if (options.progress && *rows_done % options.progress_every_rows == 0) {
-            options.progress(*rows_done, pb.total_rows);
-          }
+    for (long i = 0; i < blocks; ++i) {
+      const long b = blocks - 1 - i;
+      RtsSmoother* store = stores[i % (workers + 1)];
+      const std::vector<std::pair<int, int>> rows = block_rows(b);
+      const long count = static_cast<long>(rows.size()) - 1;
+      if (i > 0) {
+        const Failure failure = pending[i % (workers + 1)].get();
+        if (!failure.why.empty()) {
+          out.ok = false;
+          out.failure = failure.why;
+          out.failure_time = failure.time;
+          return out;  // the futures still running finish before they are destroyed
         }
-        const EkfFilterState& end = checkpoints[b + 1];
-        CHECK(filter.state().z == end.z && filter.state().P == end.P)
-            << "EKF smoother: the recomputed rows up to row " << end.row << " of log " << end.log
-            << " differ from the forward pass (a filter state not in the checkpoint)";
+        // Its filter is free, and the store of block i - 1 (smoothed): the next block.
+        launch(i + workers);
+        const long before = *rows_done;
+        *rows_done += count;
+        if (options.progress &&
+            *rows_done / options.progress_every_rows != before / options.progress_every_rows) {
+          options.progress(*rows_done, pb.total_rows);
+        }
       }
-      CHECK_EQ(smoother.size(), count);
-      smoother.Smooth(
+      CHECK_EQ(store->size(), count);
+      store->Smooth(
           x_next, P_next, [&](int j, const Eigen::VectorXd& xs, const Eigen::MatrixXd& Ps) {
             if (j == count && b < blocks - 1) return;  // the later block's first step, visited
             if (j == 0) {
@@ -190,9 +251,28 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
           });
     }
     out.smoother_s += Seconds(c0, Clock::now());
+    for (const auto& again : filters) {
+      const EkfPropagator::Counters& c = again->propagator().counters();
+      const Integrator::Stats st = again->propagator().integrator_stats();
+      recompute_counters.intervals += c.intervals;
+      recompute_counters.substeps += c.substeps;
+      recompute_counters.jacobians += c.jacobians;
+      recompute_integrator.steps += st.steps;
+      recompute_integrator.rhs_evals += st.rhs_evals;
+      recompute_integrator.jac_evals += st.jac_evals;
+      recompute_integrator.restarts += st.restarts;
+    }
   }
+  // The effort of both filters (the recomputation included, as the progress counts it).
   out.counters = filter.propagator().counters();
+  out.counters.intervals += recompute_counters.intervals;
+  out.counters.substeps += recompute_counters.substeps;
+  out.counters.jacobians += recompute_counters.jacobians;
   out.integrator = filter.propagator().integrator_stats();
+  out.integrator.steps += recompute_integrator.steps;
+  out.integrator.rhs_evals += recompute_integrator.rhs_evals;
+  out.integrator.jac_evals += recompute_integrator.jac_evals;
+  out.integrator.restarts += recompute_integrator.restarts;
   return out;
 }
 

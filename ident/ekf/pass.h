@@ -45,10 +45,11 @@ struct PassResult : EkfTally {
 // with the prior covariance. freeze: keep the parameters' mean (covariance
 // pass). smooth: run the RTS smoother at the end. record: what goes to
 // history (and, with innovations, which statistics the pass counts).
-// rows_done counts rows for the progress report.
+// rows_done counts rows for the progress report. max_rows > 0: stop after that
+// many rows of the chained logs (the noise-adaptation passes).
 PassResult RunPass(const EkfProblem& problem, const Eigen::VectorXd& p_start, bool freeze,
                    bool smooth, const EkfPassRecord& record, EkfHistorySink* history,
-                   long* rows_done);
+                   long* rows_done, long max_rows = 0);
 
 // The rows per smoother block: EkfOptions::smoother_block_rows, or (0) about
 // sqrt(rows), at least 256.

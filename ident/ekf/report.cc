@@ -194,6 +194,7 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
       {"initial_std", noise_initial},
       {"initial_source", context.noise_source},
       {"adaptations", options.noise_adaptations},
+      {"adaptation_rows", options.noise_adaptation_rows},
       {"adaptation", "R_ii = mean(nu_i^2 - (H P H^T)_ii) over the estimation pass's updates "
                      "after the burn-in (Mehra 1970), then the estimation is run again"}};
   ekf["integrator"] = {{"relative_tolerance", options.integrator.relative_tolerance},
