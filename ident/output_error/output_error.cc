@@ -1,4 +1,5 @@
 #include "ident/output_error/output_error.h"
+#include "ident/output_error/progress.h"
 
 #include <algorithm>
 #include <chrono>
@@ -65,35 +66,6 @@ std::vector<int> SegmentStarts(const EstimationLog& log, double seconds) {
   if (starts.size() > 1 && last_row - starts.back() < n / 2) starts.pop_back();
   return starts;
 }
-
-class ProgressCallback : public ceres::IterationCallback {
- public:
-  // rows: the logs' rows, each simulated (with sensitivities) once an iteration.
-  ProgressCallback(const OutputErrorOptions& options, std::string stage, Clock::time_point start,
-                   long rows)
-      : options_(options), stage_(std::move(stage)), start_(start), rows_(rows) {}
-  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
-    if (options_.progress) {
-      // No time left is printed: how many iterations a solve takes is not
-      // known before it converges; the time an iteration takes is.
-      char line[256];
-      std::snprintf(line, sizeof line,
-                    "%s: iteration %2d  cost %.6e  |step| %.2e  elapsed %.1f s  (%.1f s, %.0f "
-                    "rows/s)",
-                    stage_.c_str(), s.iteration, s.cost, s.step_norm, SecondsSince(start_),
-                    s.iteration_time_in_seconds,
-                    rows_ / std::max(s.iteration_time_in_seconds, 1e-9));
-      options_.progress(line);
-    }
-    return ceres::SOLVER_CONTINUE;
-  }
-
- private:
-  const OutputErrorOptions& options_;
-  std::string stage_;
-  Clock::time_point start_;
-  long rows_;
-};
 
 // States a flight log cannot see and the model does not use: held constant on
 // the first segment (position when not logged: nothing in the model depends
@@ -538,7 +510,8 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
         coarse ? options.coarse_max_iterations : options.max_iterations;
     solver_options.function_tolerance =
         coarse ? options.coarse_function_tolerance : options.function_tolerance;
-    ProgressCallback callback(options, stage_name, start, total_rows);
+    OutputErrorProgress callback(options.progress, stage_name, start, total_rows,
+                                 solver_options.function_tolerance);
     solver_options.callbacks = {&callback};
     ceres::Solver::Summary summary;
     const auto solve_start = Clock::now();
