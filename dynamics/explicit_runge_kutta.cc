@@ -8,28 +8,15 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
-#include <sstream>
 
 #include "core/errors.h"
 #include "dynamics/integrator.h"
 #include "dynamics/serial_vector_ops.h"
+#include "dynamics/sundials_callbacks.h"
 
 namespace coaxid {
 
 namespace {
-
-// ARKODE return codes for user callbacks: 0 success, > 0 recoverable (ARKODE retries with a
-// smaller step), < 0 unrecoverable.
-constexpr int kCallbackOk = 0;
-constexpr int kCallbackRecoverable = 1;
-constexpr int kCallbackFatal = -1;
-
-std::string Num(double value) {
-  std::ostringstream out;
-  out.precision(17);
-  out << value;
-  return out.str();
-}
 
 std::string FlagName(int flag) {
   char* name = ERKStepGetReturnFlagName(flag);  // malloc'ed
@@ -96,15 +83,7 @@ void ExplicitRungeKutta::Impl::Allocate(const IntegratorOptions& options, Check 
   // Dormand-Prince 5(4): seven stages, first-same-as-last, the classical choice for non-stiff
   // problems at tolerances of 1e-5 to 1e-9.
   check(ERKStepSetTableNum(arkode, ARKODE_DORMAND_PRINCE_7_4_5), "ERKStepSetTableNum");
-  if (options.error_controlled_states > 0 && options.error_controlled_states < n) {
-    // As in integrator.cc: a huge absolute tolerance gives the other components a negligible
-    // error weight (not 1e300: squared weighted values would be subnormal).
-    N_Vector atol = N_VClone(y);
-    check_ptr(atol, "N_VClone");
-    double* a = N_VGetArrayPointer(atol);
-    for (int i = 0; i < n; ++i) {
-      a[i] = i < options.error_controlled_states ? options.absolute_tolerance : 1e100;
-    }
+  if (N_Vector atol = PartialAbsoluteTolerances(y, options)) {
     const int flag = ERKStepSVtolerances(arkode, options.relative_tolerance, atol);
     N_VDestroy(atol);  // ARKODE keeps its own copy
     check(flag, "ERKStepSVtolerances");
@@ -134,27 +113,14 @@ std::string ExplicitRungeKutta::Impl::Why(const std::string& what, int flag) con
 int ExplicitRungeKutta::Impl::RhsCallback(double t, N_Vector y, N_Vector ydot, void* user_data) {
   Impl* self = static_cast<Impl*>(user_data);
   ++self->rhs_evals;
-  double* xdot = N_VGetArrayPointer(ydot);
-  if (!self->system.Rhs(t, N_VGetArrayPointer(y), xdot)) {
-    self->callback_error = "OdeSystem::Rhs returned false at t = " + Num(t);
-    return kCallbackFatal;
-  }
-  for (int i = 0; i < self->n; ++i) {
-    if (!std::isfinite(xdot[i])) {
-      self->callback_error = "OdeSystem::Rhs returned a non-finite derivative at t = " + Num(t);
-      return kCallbackRecoverable;
-    }
-  }
-  return kCallbackOk;
+  return EvaluateRhs(self->system, t, y, ydot, &self->callback_error);
 }
 
 void ExplicitRungeKutta::Impl::ErrorCallback(int error_code, const char* module,
                                              const char* function, char* msg, void* user_data) {
   if (error_code == ARK_WARNING) return;
   Impl* self = static_cast<Impl*>(user_data);
-  self->arkode_message = std::string(module != nullptr ? module : "") +
-                         "::" + (function != nullptr ? function : "") + ": " +
-                         (msg != nullptr ? msg : "");
+  self->arkode_message = SundialsMessage(module, function, msg);
 }
 
 ExplicitRungeKutta::ExplicitRungeKutta(const OdeSystem& system, const IntegratorOptions& options)
@@ -200,7 +166,7 @@ bool ExplicitRungeKutta::AdvanceTo(double t, double t1, double first_step, doubl
   double tret = t;
   flag = ERKStepEvolve(m.arkode, t1, m.y, &tret, ARK_NORMAL);
   if (flag < 0) {
-    *error = m.Why("ARKODE ERKStep integrating from " + Num(t) + " to " + Num(t1), flag);
+    *error = m.Why("ARKODE ERKStep integrating from " + FullPrecision(t) + " to " + FullPrecision(t1), flag);
     return false;
   }
   const double* y = N_VGetArrayPointer(m.y);

@@ -1,5 +1,6 @@
 #include "dynamics/integrator.h"
 #include "dynamics/serial_vector_ops.h"
+#include "dynamics/sundials_callbacks.h"
 
 #include <cvodes/cvodes.h>
 #include <glog/logging.h>
@@ -13,7 +14,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
-#include <sstream>
 #include <utility>
 
 #include "core/errors.h"
@@ -23,22 +23,9 @@ namespace coaxid {
 
 namespace {
 
-// CVODE return codes for user callbacks: 0 success, > 0 recoverable (CVODE retries with a
-// smaller step), < 0 unrecoverable (CVODE stops).
-constexpr int kCallbackOk = 0;
-constexpr int kCallbackRecoverable = 1;
-constexpr int kCallbackFatal = -1;
-
 // Initial-step hint as a fraction of the order-1 step CVODE chose after the first step of the
 // previous interval (see AdvanceTo).
 constexpr double kHintFraction = 0.1;
-
-std::string Num(double value) {
-  std::ostringstream out;
-  out.precision(17);
-  out << value;
-  return out.str();
-}
 
 std::string FlagName(int flag) {
   // CVodeGetReturnFlagName returns a malloc'ed string.
@@ -195,15 +182,7 @@ Integrator::Impl::Impl(const OdeSystem& system_in, const IntegratorOptions& opti
     // All allocation happens here, once; Reset() only re-initialises.
     check(CVodeInit(cvode, &Impl::RhsCallback, 0.0, y), "CVodeInit");
     check(CVodeSetUserData(cvode, this), "CVodeSetUserData");
-    if (options.error_controlled_states > 0 && options.error_controlled_states < n) {
-      // A huge absolute tolerance gives the other components a negligible error weight. Not
-      // 1e300: squared weighted values would then be subnormal, which costs 100x per flop.
-      N_Vector atol = N_VClone(y);
-      check_ptr(atol, "N_VClone");
-      double* a = N_VGetArrayPointer(atol);
-      for (int i = 0; i < n; ++i) {
-        a[i] = i < options.error_controlled_states ? options.absolute_tolerance : 1e100;
-      }
+    if (N_Vector atol = PartialAbsoluteTolerances(y, options)) {
       const int flag = CVodeSVtolerances(cvode, options.relative_tolerance, atol);
       N_VDestroy(atol);  // CVODE keeps its own copy
       check(flag, "CVodeSVtolerances");
@@ -356,7 +335,7 @@ bool Integrator::Impl::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd*
     return false;
   }
   if (!(t1 > t)) {  // Also rejects NaN.
-    error = "Integrator::AdvanceTo: t1 = " + Num(t1) + " is not after the current time " + Num(t);
+    error = "Integrator::AdvanceTo: t1 = " + FullPrecision(t1) + " is not after the current time " + FullPrecision(t);
     return false;  // Nothing was done; the integrator stays usable.
   }
   cvode_message.clear();
@@ -423,8 +402,8 @@ bool Integrator::Impl::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd*
   fresh_start = false;
   if (flag < 0) {
     step_hint = 0.0;  // Back to CVODE's estimate after the next Reset().
-    std::string message = "CVODES failed (" + FlagName(flag) + ") integrating from " + Num(t) +
-                          " to " + Num(t1) + ": " + cvode_message;
+    std::string message = "CVODES failed (" + FlagName(flag) + ") integrating from " + FullPrecision(t) +
+                          " to " + FullPrecision(t1) + ": " + cvode_message;
     if (!callback_error.empty()) message += " [" + callback_error + "]";
     return Fail(message);
   }
@@ -449,22 +428,7 @@ bool Integrator::Impl::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd*
 int Integrator::Impl::RhsCallback(double t, N_Vector y, N_Vector ydot, void* user_data) {
   Impl* self = static_cast<Impl*>(user_data);
   ++self->rhs_evals;
-  double* xdot = N_VGetArrayPointer(ydot);
-  if (!self->system.Rhs(t, N_VGetArrayPointer(y), xdot)) {
-    // The model says it cannot be evaluated here (blown-up parameters): a smaller step will not
-    // help, so stop at once.
-    self->callback_error = "OdeSystem::Rhs returned false at t = " + Num(t);
-    return kCallbackFatal;
-  }
-  for (int i = 0; i < self->n; ++i) {
-    if (!std::isfinite(xdot[i])) {
-      // Typically a wild trial iterate of an oversized step: let CVODE retry with a smaller
-      // one (it gives up after a few such failures in a row).
-      self->callback_error = "OdeSystem::Rhs returned a non-finite derivative at t = " + Num(t);
-      return kCallbackRecoverable;
-    }
-  }
-  return kCallbackOk;
+  return EvaluateRhs(self->system, t, y, ydot, &self->callback_error);
 }
 
 bool Integrator::Impl::SensitivityJacobians(double t_eval, const double* y_eval) {
@@ -473,7 +437,7 @@ bool Integrator::Impl::SensitivityJacobians(double t_eval, const double* y_eval)
   ++jac_evals;
   cache_valid = false;
   if (!system.Jacobians(t_eval, y_eval, &dfdx, p > 0 ? &dfdp : nullptr)) {
-    callback_error = "OdeSystem::Jacobians returned false at t = " + Num(t_eval);
+    callback_error = "OdeSystem::Jacobians returned false at t = " + FullPrecision(t_eval);
     return false;
   }
   CHECK(dfdx.rows() == n && dfdx.cols() == n) << "OdeSystem::Jacobians: df/dx has a wrong size";
@@ -505,7 +469,7 @@ int Integrator::Impl::JacCallback(double t, N_Vector y, N_Vector /*fy*/, SUNMatr
   Impl* self = static_cast<Impl*>(user_data);
   ++self->jac_evals;
   if (!self->system.Jacobians(t, N_VGetArrayPointer(y), &self->jac_dfdx, nullptr)) {
-    self->callback_error = "OdeSystem::Jacobians returned false at t = " + Num(t);
+    self->callback_error = "OdeSystem::Jacobians returned false at t = " + FullPrecision(t);
     return kCallbackFatal;
   }
   const int n = self->n;
@@ -520,9 +484,7 @@ void Integrator::Impl::ErrorCallback(int error_code, const char* module, const c
                                      char* msg, void* user_data) {
   if (error_code == CV_WARNING) return;  // Warnings do not make a call fail.
   Impl* self = static_cast<Impl*>(user_data);
-  self->cvode_message = std::string(module != nullptr ? module : "") +
-                        "::" + (function != nullptr ? function : "") + ": " +
-                        (msg != nullptr ? msg : "");
+  self->cvode_message = SundialsMessage(module, function, msg);
 }
 
 Integrator::Integrator(const OdeSystem& system, const IntegratorOptions& options,
