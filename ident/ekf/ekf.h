@@ -63,12 +63,13 @@
 // (ekf/pass.h), so its memory grows with sqrt(rows), not with the rows.
 //
 // Cost (bench/ident/ekf/ekf_bench.cc, 60 s at 200 Hz, 12 unknowns augmented): per
-// 5 ms row ~14 us propagation (CVODE restarted at the input change, ~5
-// steps; one autodiff Jacobian; the exponential series) and ~8 us update
-// (autodiff of the accelerometer, Cholesky, Joseph form), per pass; the
-// smoother ~15 us per row, plus the recomputation of every block but the
-// last (about one more pass of the filter: ekf/pass.h). The
-// variational-equation transition costs ~35 us per row instead of 14.
+// 5 ms row ~9 us propagation (ARKODE restarted at the input change, one
+// Runge-Kutta step; one autodiff Jacobian; the exponential series) and ~8 us
+// update (autodiff of the accelerometer, Cholesky, Joseph form), per pass;
+// the smoother ~15 us per row, plus the recomputation of every block but the
+// last (about one more pass of the filter, shared out over the cores:
+// ekf/pass.h). The variational-equation transition costs ~25 us per row
+// instead of 9.
 //
 // Memory: the filter and its smoother O(sqrt(rows)) (ekf/pass.h); the
 // per-row records go to an EkfHistorySink (ekf/history_sink.h), by default

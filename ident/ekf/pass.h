@@ -10,13 +10,17 @@
 // CVODE's step hint) every K rows, K = EkfOptions::smoother_block_rows (0:
 // about sqrt of the rows, at least 256), and the RTS store of the last block
 // only. The backward pass then goes block by block from the last: restore
-// the block's checkpoint, run its K rows again through the same filter
+// the block's checkpoint, run its K rows again through the same filter code
 // (storing only that block's C_k, D_k, a_k: rts_smoother.h), and run the RTS
 // recursion backward through the block from the later block's smoothed x, P.
 // The recomputed rows are the forward pass's bit for bit (same code, same
 // state; checked at every block's end), so the smoothed states equal the
 // all-in-memory smoother's (a block of every row: no recomputation at all).
-// Memory O(sqrt(rows) n^2), time about one more forward pass.
+// The blocks are independent given their checkpoints: one filter per core
+// (at most 4) recomputes them side by side, each into its own store, a few
+// blocks ahead of the backward recursion (which is the cheap part).
+// Memory O(sqrt(rows) n^2 cores), time about one more forward pass over the
+// cores.
 //
 // Internal to ident/ekf: ekf.cc uses it.
 #pragma once
