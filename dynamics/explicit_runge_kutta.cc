@@ -36,8 +36,9 @@ struct ExplicitRungeKutta::Impl {
   static void ErrorCallback(int error_code, const char* module, const char* function, char* msg,
                             void* user_data);
   std::string Why(const std::string& what, int flag) const;
-  template <typename Check, typename CheckPtr>
-  void Allocate(const IntegratorOptions& options, Check check, CheckPtr check_ptr);
+  // Throw ComputationError when a SUNDIALS call fails (flag != 0) or returns null.
+  void Check(int flag, const char* what) const;
+  static void CheckNotNull(const void* pointer, const char* what);
 
   const OdeSystem& system;
   const int n;
@@ -51,48 +52,44 @@ struct ExplicitRungeKutta::Impl {
 
 ExplicitRungeKutta::Impl::Impl(const OdeSystem& system_in, const IntegratorOptions& options)
     : system(system_in), n(system_in.NumStates()) {
-  auto check = [this](int flag, const char* what) {
-    if (flag != 0) throw ComputationError("ExplicitRungeKutta: " + Why(what, flag));
-  };
-  auto check_ptr = [](const void* ptr, const char* what) {
-    if (ptr == nullptr) {
-      throw ComputationError(std::string("ExplicitRungeKutta: ") + what + " failed");
-    }
-  };
   try {
-    Allocate(options, check, check_ptr);
+    Check(SUNContext_Create(nullptr, &context), "SUNContext_Create");
+    y = N_VNew_Serial(n, context);
+    CheckNotNull(y, "N_VNew_Serial");
+    N_VConst(0.0, y);
+    Check(N_VEnableFusedOps_Serial(y, SUNTRUE), "N_VEnableFusedOps_Serial");
+    if (options.optimized_vector_ops) UseOptimizedSerialOps(y);
+    arkode = ERKStepCreate(&Impl::RhsCallback, 0.0, y, context);
+    CheckNotNull(arkode, "ERKStepCreate");
+    Check(ERKStepSetErrHandlerFn(arkode, &Impl::ErrorCallback, this), "ERKStepSetErrHandlerFn");
+    Check(ERKStepSetUserData(arkode, this), "ERKStepSetUserData");
+    // Dormand-Prince 5(4): seven stages, first-same-as-last, the classical choice for non-stiff
+    // problems at tolerances of 1e-5 to 1e-9.
+    Check(ERKStepSetTableNum(arkode, ARKODE_DORMAND_PRINCE_7_4_5), "ERKStepSetTableNum");
+    if (N_Vector atol = PartialAbsoluteTolerances(y, options)) {
+      const int flag = ERKStepSVtolerances(arkode, options.relative_tolerance, atol);
+      N_VDestroy(atol);  // ARKODE keeps its own copy
+      Check(flag, "ERKStepSVtolerances");
+    } else {
+      Check(ERKStepSStolerances(arkode, options.relative_tolerance, options.absolute_tolerance),
+            "ERKStepSStolerances");
+    }
+    Check(ERKStepSetMaxNumSteps(arkode, options.max_steps_per_interval), "ERKStepSetMaxNumSteps");
+    Check(ERKStepSetMaxHnilWarns(arkode, -1), "ERKStepSetMaxHnilWarns");
   } catch (...) {
     Release();  // The destructor does not run for an object whose constructor threw.
     throw;
   }
 }
 
-template <typename Check, typename CheckPtr>
-void ExplicitRungeKutta::Impl::Allocate(const IntegratorOptions& options, Check check,
-                                        CheckPtr check_ptr) {
-  check(SUNContext_Create(nullptr, &context), "SUNContext_Create");
-  y = N_VNew_Serial(n, context);
-  check_ptr(y, "N_VNew_Serial");
-  N_VConst(0.0, y);
-  check(N_VEnableFusedOps_Serial(y, SUNTRUE), "N_VEnableFusedOps_Serial");
-  if (options.optimized_vector_ops) UseOptimizedSerialOps(y);
-  arkode = ERKStepCreate(&Impl::RhsCallback, 0.0, y, context);
-  check_ptr(arkode, "ERKStepCreate");
-  check(ERKStepSetErrHandlerFn(arkode, &Impl::ErrorCallback, this), "ERKStepSetErrHandlerFn");
-  check(ERKStepSetUserData(arkode, this), "ERKStepSetUserData");
-  // Dormand-Prince 5(4): seven stages, first-same-as-last, the classical choice for non-stiff
-  // problems at tolerances of 1e-5 to 1e-9.
-  check(ERKStepSetTableNum(arkode, ARKODE_DORMAND_PRINCE_7_4_5), "ERKStepSetTableNum");
-  if (N_Vector atol = PartialAbsoluteTolerances(y, options)) {
-    const int flag = ERKStepSVtolerances(arkode, options.relative_tolerance, atol);
-    N_VDestroy(atol);  // ARKODE keeps its own copy
-    check(flag, "ERKStepSVtolerances");
-  } else {
-    check(ERKStepSStolerances(arkode, options.relative_tolerance, options.absolute_tolerance),
-          "ERKStepSStolerances");
+void ExplicitRungeKutta::Impl::Check(int flag, const char* what) const {
+  if (flag != 0) throw ComputationError("ExplicitRungeKutta: " + Why(what, flag));
+}
+
+void ExplicitRungeKutta::Impl::CheckNotNull(const void* pointer, const char* what) {
+  if (pointer == nullptr) {
+    throw ComputationError(std::string("ExplicitRungeKutta: ") + what + " failed");
   }
-  check(ERKStepSetMaxNumSteps(arkode, options.max_steps_per_interval), "ERKStepSetMaxNumSteps");
-  check(ERKStepSetMaxHnilWarns(arkode, -1), "ERKStepSetMaxHnilWarns");
 }
 
 void ExplicitRungeKutta::Impl::Release() {
@@ -166,7 +163,9 @@ bool ExplicitRungeKutta::AdvanceTo(double t, double t1, double first_step, doubl
   double tret = t;
   flag = ERKStepEvolve(m.arkode, t1, m.y, &tret, ARK_NORMAL);
   if (flag < 0) {
-    *error = m.Why("ARKODE ERKStep integrating from " + FullPrecision(t) + " to " + FullPrecision(t1), flag);
+    *error = m.Why("ARKODE ERKStep integrating from " + FullPrecision(t) + " to " +
+                       FullPrecision(t1),
+                   flag);
     return false;
   }
   const double* y = N_VGetArrayPointer(m.y);

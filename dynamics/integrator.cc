@@ -71,6 +71,8 @@ struct Integrator::Impl {
   void Release();  // Frees all SUNDIALS memory; idempotent.
 
   bool Reset(double t0, const Eigen::VectorXd& x0, const Eigen::MatrixXd* S0);
+  // Reset()'s CVODES part: CVodeReInit and CVodeSensReInit; false via Fail().
+  bool ReInitCvodes(double t0, const Eigen::VectorXd& x0, const Eigen::MatrixXd* S0);
   bool AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd* S);
   bool Fail(const std::string& message);
 
@@ -282,13 +284,20 @@ bool Integrator::Impl::Reset(double t0, const Eigen::VectorXd& x0, const Eigen::
   if (erk) {
     std::string why;
     if (!erk->Reset(t0, x0, &why)) return Fail(why);
-    t = t0;
-    fresh_start = true;
-    ready = true;
-    error.clear();
-    failure.clear();
-    return true;
+  } else if (!ReInitCvodes(t0, x0, S0)) {
+    return false;
   }
+  t = t0;
+  cache_valid = false;
+  fresh_start = true;
+  ready = true;
+  error.clear();
+  failure.clear();
+  return true;
+}
+
+bool Integrator::Impl::ReInitCvodes(double t0, const Eigen::VectorXd& x0,
+                                    const Eigen::MatrixXd* S0) {
   long steps = 0;
   CVodeGetNumSteps(cvode, &steps);
   completed_steps += steps;
@@ -318,12 +327,6 @@ bool Integrator::Impl::Reset(double t0, const Eigen::VectorXd& x0, const Eigen::
       return Fail("CVodeSensReInit failed (" + FlagName(flag) + "): " + cvode_message);
     }
   }
-  t = t0;
-  cache_valid = false;
-  fresh_start = true;
-  ready = true;
-  error.clear();
-  failure.clear();
   return true;
 }
 
@@ -335,7 +338,8 @@ bool Integrator::Impl::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd*
     return false;
   }
   if (!(t1 > t)) {  // Also rejects NaN.
-    error = "Integrator::AdvanceTo: t1 = " + FullPrecision(t1) + " is not after the current time " + FullPrecision(t);
+    error = "Integrator::AdvanceTo: t1 = " + FullPrecision(t1) +
+            " is not after the current time " + FullPrecision(t);
     return false;  // Nothing was done; the integrator stays usable.
   }
   cvode_message.clear();
@@ -402,8 +406,8 @@ bool Integrator::Impl::AdvanceTo(double t1, Eigen::VectorXd* x, Eigen::MatrixXd*
   fresh_start = false;
   if (flag < 0) {
     step_hint = 0.0;  // Back to CVODE's estimate after the next Reset().
-    std::string message = "CVODES failed (" + FlagName(flag) + ") integrating from " + FullPrecision(t) +
-                          " to " + FullPrecision(t1) + ": " + cvode_message;
+    std::string message = "CVODES failed (" + FlagName(flag) + ") integrating from " +
+                          FullPrecision(t) + " to " + FullPrecision(t1) + ": " + cvode_message;
     if (!callback_error.empty()) message += " [" + callback_error + "]";
     return Fail(message);
   }

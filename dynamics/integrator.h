@@ -122,6 +122,13 @@ class Integrator {
   // sensitivities), and Reset() calls.
   struct Stats {
     long steps = 0, rhs_evals = 0, jac_evals = 0, restarts = 0;
+    Stats& operator+=(const Stats& o) {
+      steps += o.steps;
+      rhs_evals += o.rhs_evals;
+      jac_evals += o.jac_evals;
+      restarts += o.restarts;
+      return *this;
+    }
   };
   Stats stats() const;
 

@@ -232,13 +232,8 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
     result.update_s += pass.update_s;
     result.smoother_s += pass.smoother_s;
     result.updates += pass.updates;
-    result.propagation.intervals += pass.counters.intervals;
-    result.propagation.substeps += pass.counters.substeps;
-    result.propagation.jacobians += pass.counters.jacobians;
-    result.integrator.steps += pass.integrator.steps;
-    result.integrator.rhs_evals += pass.integrator.rhs_evals;
-    result.integrator.jac_evals += pass.integrator.jac_evals;
-    result.integrator.restarts += pass.integrator.restarts;
+    result.propagation += pass.counters;
+    result.integrator += pass.integrator;
   };
 
   // Pass 1: estimation; with noise adaptation, first the passes that

@@ -112,6 +112,12 @@ class EkfPropagator {
 
   struct Counters {
     long intervals = 0, substeps = 0, jacobians = 0;
+    Counters& operator+=(const Counters& o) {
+      intervals += o.intervals;
+      substeps += o.substeps;
+      jacobians += o.jacobians;
+      return *this;
+    }
   };
   const Counters& counters() const { return counters_; }
   Integrator::Stats integrator_stats() const { return integrator_->stats(); }

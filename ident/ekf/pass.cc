@@ -252,27 +252,15 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
     }
     out.smoother_s += Seconds(c0, Clock::now());
     for (const auto& again : filters) {
-      const EkfPropagator::Counters& c = again->propagator().counters();
-      const Integrator::Stats st = again->propagator().integrator_stats();
-      recompute_counters.intervals += c.intervals;
-      recompute_counters.substeps += c.substeps;
-      recompute_counters.jacobians += c.jacobians;
-      recompute_integrator.steps += st.steps;
-      recompute_integrator.rhs_evals += st.rhs_evals;
-      recompute_integrator.jac_evals += st.jac_evals;
-      recompute_integrator.restarts += st.restarts;
+      recompute_counters += again->propagator().counters();
+      recompute_integrator += again->propagator().integrator_stats();
     }
   }
-  // The effort of both filters (the recomputation included, as the progress counts it).
+  // The effort of every filter (the recomputation included, as the progress counts it).
   out.counters = filter.propagator().counters();
-  out.counters.intervals += recompute_counters.intervals;
-  out.counters.substeps += recompute_counters.substeps;
-  out.counters.jacobians += recompute_counters.jacobians;
+  out.counters += recompute_counters;
   out.integrator = filter.propagator().integrator_stats();
-  out.integrator.steps += recompute_integrator.steps;
-  out.integrator.rhs_evals += recompute_integrator.rhs_evals;
-  out.integrator.jac_evals += recompute_integrator.jac_evals;
-  out.integrator.restarts += recompute_integrator.restarts;
+  out.integrator += recompute_integrator;
   return out;
 }
 
