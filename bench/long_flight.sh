@@ -3,12 +3,15 @@
 # simulated flights of 5, 20 and 60 minutes (the shipped flight scenario,
 # 200 Hz, made longer) plus the shipped balance log, measured the way a user
 # would: /usr/bin/time -v around the `coaxid` command (the EKF, with its
-# smoother, on the flight alone: it takes no balance log). Prints a Markdown
+# smoother, on the flight alone: it takes no balance log; `discover`, the
+# whole closing loop with every library candidate, on the flight alone too:
+# issue 15 asks for it on a flight log). Prints a Markdown
 # table on stdout; the logs and outputs go to $COAXID_LONG_DIR
 # (default /tmp/coaxid-long) and are reused by later runs.
 #
 #   bench/long_flight.sh                       # output_error at 5, 20, 60 min
 #   bench/long_flight.sh "ekf" "5 20"          # methods, minutes
+#   bench/long_flight.sh discover "5 20"
 #
 # Run on an idle machine: the numbers are wall times.
 set -euo pipefail
@@ -36,13 +39,18 @@ for m in $minutes; do
     extra=()
     logs="$log,$root/data/glmav/balance.csv"
     what="$m min + balance"
+    command=(identify --method="$method")
     if [[ "$method" == ekf ]]; then
       extra=(--smoother)
       logs="$log"
       what="$m min"
+    elif [[ "$method" == discover ]]; then
+      command=(discover)
+      logs="$log"
+      what="$m min"
     fi
     out="$dir/${method}_${m}min"
-    /usr/bin/time -v -o "$dir/${method}_${m}min.time" "$coaxid" identify --method="$method" \
+    /usr/bin/time -v -o "$dir/${method}_${m}min.time" "$coaxid" "${command[@]}" \
       "${extra[@]}" --logs="$logs" --config="$root/configs/glmav.yaml" \
       --out="$out" > /dev/null 2> "$dir/${method}_${m}min.err" ||
       { echo "long_flight.sh: $method on $m min failed: see $dir/${method}_${m}min.err" >&2; exit 1; }

@@ -282,7 +282,7 @@ std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
   const double rss0 = WeightedRss(logs, pass.fit.predictions, pass.fit.noise, &n0);
   // Under the null every candidate is absent: the nuisance columns are the
   // segment states and the model's own free parameters.
-  const ColumnTester tester(lin, ColumnsExcept(lin, AllParameterNames(pass.candidates)));
+  const ColumnTester tester(lin, ParametersExcept(lin, AllParameterNames(pass.candidates)));
   const int num_free = static_cast<int>(pass.fitted.parameters.FreeIndices().size());
 
   std::vector<CandidateScore> scores;
@@ -312,7 +312,7 @@ std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
     std::string list;
     for (const std::string& c : s.channels) list += (list.empty() ? "" : ", ") + c;
     s.reason += "; it would show in " + list;
-    const ColumnTest t = tester.Test(ParameterColumns(lin, names));
+    const ColumnTest t = tester.Test(ParameterIndices(lin, names));
     s.clusters = t.clusters;
     s.covariance_dof = t.covariance_dof;
     if (!t.ok) {
@@ -331,9 +331,8 @@ std::vector<CandidateScore> ScoreCandidates(const CandidatePass& pass,
     s.bic_change = s.num_parameters * std::log(static_cast<double>(n0)) - t.predicted_rss_drop;
     s.predicted_share = weighted_excess > 0 ? t.predicted_rss_drop / weighted_excess : 0.0;
     for (size_t k = 0; k < names.size(); ++k) {
-      const int column = lin.ParameterColumn(names[k]) - lin.num_state_columns;
       const Parameter& p = candidate.parameters.Get(names[k]);
-      const double value = p.value + t.step[k] * lin.parameter_scales[column];
+      const double value = p.value + t.step[k] * lin.parameter_scales[lin.ParameterIndex(names[k])];
       if (value < p.lower || value > p.upper) s.beyond_linear_range = true;
       s.linearised_estimates[names[k]] = std::clamp(value, p.lower, p.upper);
     }
@@ -480,12 +479,12 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
   const LinearisedFit& lin = at_refit.linearised;
   std::vector<std::string> excluded = AllParameterNames(at_refit.candidates);
   excluded.insert(excluded.end(), names.begin(), names.end());
-  const ColumnTester tester(lin, ColumnsExcept(lin, excluded));
+  const ColumnTester tester(lin, ParametersExcept(lin, excluded));
   // Scaled distance from absence (every effect's absent value is 0). A
   // parameter held at its bound has no column: test the others.
   std::vector<std::string> tested;
   for (const std::string& name : names) {
-    if (lin.ParameterColumn(name) >= 0) tested.push_back(name);
+    if (lin.ParameterIndex(name) >= 0) tested.push_back(name);
   }
   if (tested.empty()) {
     score->why_not_confirmed = "at the refit every parameter of it sits at a bound";
@@ -493,10 +492,9 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
   }
   Eigen::VectorXd values(tested.size());
   for (size_t k = 0; k < tested.size(); ++k) {
-    const int column = lin.ParameterColumn(tested[k]) - lin.num_state_columns;
-    values[k] = refit->parameters.Value(tested[k]) / lin.parameter_scales[column];
+    values[k] = refit->parameters.Value(tested[k]) / lin.parameter_scales[lin.ParameterIndex(tested[k])];
   }
-  const ColumnTest t = tester.Test(ParameterColumns(lin, tested), &values);
+  const ColumnTest t = tester.Test(ParameterIndices(lin, tested), &values);
   if (!t.ok) {
     score->why_not_confirmed = "at the refit: " + t.why_not;
     return false;

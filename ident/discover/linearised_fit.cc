@@ -90,11 +90,81 @@ void Evaluate(ClusterJob* job) {
 
 }  // namespace
 
-int LinearisedFit::ParameterColumn(const std::string& name) const {
-  for (size_t k = 0; k < parameter_names.size(); ++k) {
-    if (parameter_names[k] == name) return num_state_columns + static_cast<int>(k);
+LinearisedFit::LinearisedFit(int num_segments, std::vector<std::string> names,
+                             Eigen::VectorXd scales)
+    : num_state_columns(kNumStates * num_segments),
+      parameter_names(std::move(names)),
+      parameter_scales(std::move(scales)),
+      state_diagonal(num_segments, StateBlock::Zero()),
+      state_next(num_segments, StateBlock::Zero()),
+      state_parameter(Eigen::MatrixXd::Zero(num_state_columns, parameter_names.size())),
+      parameter_normal(Eigen::MatrixXd::Zero(parameter_names.size(), parameter_names.size())),
+      gradient(Eigen::VectorXd::Zero(num_state_columns + parameter_names.size())) {
+  CHECK_EQ(parameter_scales.size(), NumParameters());
+}
+
+int LinearisedFit::ParameterIndex(const std::string& name) const {
+  for (int k = 0; k < NumParameters(); ++k) {
+    if (parameter_names[k] == name) return k;
   }
   return -1;
+}
+
+void LinearisedFit::AddNormal(const std::vector<int>& columns, const Eigen::MatrixXd& block) {
+  const int S = num_state_columns;
+  const int n = static_cast<int>(columns.size());
+  CHECK_EQ(block.rows(), n);
+  CHECK_EQ(block.cols(), n);
+  for (int a = 0; a < n; ++a) {
+    const int i = columns[a];
+    for (int c = 0; c < n; ++c) {
+      const int j = columns[c];
+      if (i >= S && j >= S) {
+        parameter_normal(i - S, j - S) += block(a, c);
+      } else if (i < S && j >= S) {
+        state_parameter(i, j - S) += block(a, c);
+      } else if (i < S && j < S) {
+        const int si = i / kNumStates, sj = j / kNumStates;
+        if (si == sj) {
+          state_diagonal[si](i % kNumStates, j % kNumStates) += block(a, c);
+        } else if (sj == si + 1) {
+          state_next[si](i % kNumStates, j % kNumStates) += block(a, c);
+        } else {
+          CHECK_EQ(si, sj + 1) << "a residual block couples segments " << si << " and " << sj
+                               << ", which are not neighbours";
+        }
+      }  // the lower triangle's state-parameter and next-segment entries are the transposes
+    }
+  }
+}
+
+void LinearisedFit::AddCluster(const std::vector<int>& columns, const Eigen::VectorXd& block_gradient,
+                               int residuals, int stratum) {
+  CHECK_EQ(block_gradient.size(), static_cast<int>(columns.size()));
+  Cluster c;
+  c.parameters = Eigen::VectorXd::Zero(NumParameters());
+  int first = num_state_columns, last = -1;
+  for (int j : columns) {
+    if (j < num_state_columns) {
+      first = std::min(first, j);
+      last = std::max(last, j);
+    }
+  }
+  c.first_state_column = last < 0 ? 0 : first;
+  c.states = Eigen::VectorXd::Zero(last < 0 ? 0 : last - first + 1);
+  CHECK_LE(c.states.size(), 2 * kNumStates) << "a cluster spans more than two segments";
+  for (size_t a = 0; a < columns.size(); ++a) {
+    const int j = columns[a];
+    gradient[j] += block_gradient[a];
+    if (j < num_state_columns) {
+      c.states[j - first] += block_gradient[a];
+    } else {
+      c.parameters[j - num_state_columns] += block_gradient[a];
+    }
+  }
+  c.residuals = residuals;
+  c.stratum = stratum;
+  clusters.push_back(std::move(c));
 }
 
 int ClusterRows(const EstimationLog& log, const Eigen::MatrixXd& prediction) {
@@ -199,51 +269,109 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
   }
   for (std::thread& t : pool) t.join();
 
-  const int D = state_columns + free.size();
   LinearisedFit& f = *out;
-  f = LinearisedFit();
-  f.num_state_columns = state_columns;
-  f.parameter_names = free.names();
-  f.parameter_scales = free.scales();
-  f.normal = Eigen::MatrixXd::Zero(D, D);
-  f.gradient = Eigen::VectorXd::Zero(D);
+  f = LinearisedFit(state_columns / kNumStates, free.names(), free.scales());
   for (ClusterJob& job : jobs) {
     if (!job.ok) {
       *why = "the model cannot be evaluated along the fitted trajectory (CVODE failed)";
       return false;
     }
-    for (size_t a = 0; a < job.columns.size(); ++a) {
-      for (size_t c = 0; c < job.columns.size(); ++c) {
-        f.normal(job.columns[a], job.columns[c]) += job.normal(a, c);
-      }
-    }
+    f.AddNormal(job.columns, job.normal);
     int begin = 0;
     for (size_t k = 0; k < job.gradients.size(); ++k) {
-      Eigen::VectorXd b = Eigen::VectorXd::Zero(D);
-      for (size_t a = 0; a < job.columns.size(); ++a) b[job.columns[a]] += job.gradients[k][a];
-      f.gradient += b;
-      f.cluster_gradients.push_back(std::move(b));
-      f.cluster_residuals.push_back(job.cluster_ends[k] - begin);
-      f.cluster_strata.push_back(job.stratum);
+      f.AddCluster(job.columns, job.gradients[k], job.cluster_ends[k] - begin, job.stratum);
       begin = job.cluster_ends[k];
     }
     f.rss += job.rss;
     f.num_residuals += job.cost->num_residuals();
+    job = ClusterJob();  // its Jacobian products are in f now
   }
   return true;
 }
 
+namespace {
+
+// N_ss^-1 for a block-tridiagonal N_ss (LinearisedFit's state blocks) by
+// block Cholesky elimination along the segments: O(segments) work and memory.
+// Each diagonal block gets a ridge of 1e-10 of its own diagonal (1 where a
+// column is zero: a channel no log holds), which keeps near-singular
+// directions (a position no channel fixes, propagated by the ties) from
+// amplifying round-off, as the dense pseudo-inverse's eigenvalue threshold did.
+class BlockTridiagonalSolver {
+ public:
+  using Block = LinearisedFit::StateBlock;
+  explicit BlockTridiagonalSolver(const LinearisedFit& fit) : fit_(fit) {
+    const int S = static_cast<int>(fit.state_diagonal.size());
+    pivots_.reserve(S);
+    Block previous_inverse_times_next = Block::Zero();  // Lambda_{j-1}^-1 N_{j-1,j}
+    for (int j = 0; j < S; ++j) {
+      Block lambda = fit.state_diagonal[j];
+      for (int k = 0; k < kNumStates; ++k) {
+        const double d = lambda(k, k);
+        lambda(k, k) += d > 0 ? 1e-10 * d : 1.0;
+      }
+      if (j > 0) lambda -= fit.state_next[j - 1].transpose() * previous_inverse_times_next;
+      pivots_.emplace_back(lambda);
+      previous_inverse_times_next = pivots_.back().solve(fit.state_next[j]);
+    }
+  }
+
+  // X = N_ss^-1 B, B with num_state_columns rows.
+  Eigen::MatrixXd Solve(const Eigen::MatrixXd& B) const {
+    const int S = static_cast<int>(pivots_.size());
+    Eigen::MatrixXd X = B;
+    auto rows = [&X](int j) { return X.middleRows(kNumStates * j, kNumStates); };
+    for (int j = 1; j < S; ++j) {  // forward: y_j = b_j - N_j-1,j^T Lambda_j-1^-1 y_j-1
+      rows(j) -= fit_.state_next[j - 1].transpose() * pivots_[j - 1].solve(rows(j - 1));
+    }
+    for (int j = S - 1; j >= 0; --j) {  // back: x_j = Lambda_j^-1 (y_j - N_j,j+1 x_j+1)
+      Eigen::MatrixXd y = rows(j);
+      if (j + 1 < S) y -= fit_.state_next[j] * rows(j + 1);
+      rows(j) = pivots_[j].solve(y);
+    }
+    return X;
+  }
+
+ private:
+  const LinearisedFit& fit_;
+  std::vector<Eigen::LDLT<Block>> pivots_;
+};
+
+}  // namespace
+
 ColumnTester::ColumnTester(const LinearisedFit& fit, const std::vector<int>& nuisance)
     : fit_(fit), nuisance_(nuisance) {
+  // The states out: Y = N_ss^-1 N_s,theta, N~ = N_theta,theta - N_s,theta^T Y.
+  const int P = fit.NumParameters();
+  const int M = static_cast<int>(fit.clusters.size());
+  Eigen::MatrixXd Y;
+  if (fit.num_state_columns > 0) {
+    Y = BlockTridiagonalSolver(fit).Solve(fit.state_parameter);
+    reduced_normal_ = fit.parameter_normal - fit.state_parameter.transpose() * Y;
+    reduced_normal_ = 0.5 * (reduced_normal_ + reduced_normal_.transpose());
+  } else {
+    reduced_normal_ = fit.parameter_normal;
+  }
+  reduced_scores_.resize(P, M);
+  for (int m = 0; m < M; ++m) {
+    const LinearisedFit::Cluster& c = fit.clusters[m];
+    reduced_scores_.col(m) = c.parameters;
+    if (c.states.size() > 0) {
+      reduced_scores_.col(m) -=
+          Y.middleRows(c.first_state_column, c.states.size()).transpose() * c.states;
+    }
+  }
   const int n = static_cast<int>(nuisance.size());
   Eigen::MatrixXd A(n, n);
   for (int a = 0; a < n; ++a) {
-    for (int c = 0; c < n; ++c) A(a, c) = fit.normal(nuisance[a], nuisance[c]);
+    for (int c = 0; c < n; ++c) A(a, c) = reduced_normal_(nuisance[a], nuisance[c]);
   }
-  // Jacobi scaling makes the rank threshold relative to each column's own size.
+  // Jacobi scaling by each column's own size makes the rank threshold count
+  // what the states leave of it.
   inverse_scale_.resize(n);
   for (int a = 0; a < n; ++a) {
-    inverse_scale_[a] = A(a, a) > 0 ? 1 / std::sqrt(A(a, a)) : 0.0;
+    const double d = fit.parameter_normal(nuisance[a], nuisance[a]);
+    inverse_scale_[a] = d > 0 ? 1 / std::sqrt(d) : 0.0;
   }
   const Eigen::MatrixXd scaled = inverse_scale_.asDiagonal() * A * inverse_scale_.asDiagonal();
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
@@ -266,26 +394,30 @@ ColumnTest ColumnTester::Test(const std::vector<int>& tested, const Eigen::Vecto
   ColumnTest t;
   const int q = static_cast<int>(tested.size());
   const int n = static_cast<int>(nuisance_.size());
-  const int M = static_cast<int>(fit_.cluster_gradients.size());
+  const int M = static_cast<int>(fit_.clusters.size());
   t.q = q;
   t.clusters = M;
   if (q == 0) {
     t.why_not = "no column to test";
     return t;
   }
-  // X = N_00^+ N_0Z (n x q), S = N_ZZ - N_Z0 X.
-  Eigen::MatrixXd N0Z(n, q), NZZ(q, q);
+  // With the states already out (N~): X = N~_00^+ N~_0Z (n x q),
+  // S = N~_ZZ - N~_Z0 X. NZZ, the tested columns' own N, is the yardstick.
+  Eigen::MatrixXd N0Z(n, q), NZZ(q, q), reduced_ZZ(q, q);
   for (int a = 0; a < n; ++a) {
-    for (int c = 0; c < q; ++c) N0Z(a, c) = fit_.normal(nuisance_[a], tested[c]);
+    for (int c = 0; c < q; ++c) N0Z(a, c) = reduced_normal_(nuisance_[a], tested[c]);
   }
   for (int a = 0; a < q; ++a) {
-    for (int c = 0; c < q; ++c) NZZ(a, c) = fit_.normal(tested[a], tested[c]);
+    for (int c = 0; c < q; ++c) {
+      NZZ(a, c) = fit_.parameter_normal(tested[a], tested[c]);
+      reduced_ZZ(a, c) = reduced_normal_(tested[a], tested[c]);
+    }
   }
   const Eigen::MatrixXd X =
       inverse_scale_.asDiagonal() *
       (basis_ * (inverse_eigenvalues_.asDiagonal() *
                  (basis_.transpose() * (inverse_scale_.asDiagonal() * N0Z))));
-  Eigen::MatrixXd S = NZZ - N0Z.transpose() * X;
+  Eigen::MatrixXd S = reduced_ZZ - N0Z.transpose() * X;
   S = 0.5 * (S + S.transpose());
   // The tested columns must keep a part of their own after the projection,
   // as a group: the smallest eigenvalue of S scaled to unit diagonal of N_ZZ
@@ -314,18 +446,15 @@ ColumnTest ColumnTester::Test(const std::vector<int>& tested, const Eigen::Vecto
       return t;
     }
   }
-  // Projected cluster scores g_c = b_c[Z] - X^T b_c[0] (q x M).
+  // Projected cluster scores g_c = b~_c[Z] - X^T b~_c[0] (q x M).
   Eigen::MatrixXd g(q, M);
-  for (int m = 0; m < M; ++m) {
-    const Eigen::VectorXd& b = fit_.cluster_gradients[m];
-    Eigen::VectorXd b0(n);
-    for (int a = 0; a < n; ++a) b0[a] = b[nuisance_[a]];
-    for (int c = 0; c < q; ++c) g(c, m) = b[tested[c]];
-    g.col(m) -= X.transpose() * b0;
-  }
+  Eigen::MatrixXd scores_0(n, M);
+  for (int c = 0; c < q; ++c) g.row(c) = reduced_scores_.row(tested[c]);
+  for (int a = 0; a < n; ++a) scores_0.row(a) = reduced_scores_.row(nuisance_[a]);
+  g -= X.transpose() * scores_0;
   // C, centred within each stratum; nu from the strata that carry the score.
   std::map<int, std::vector<int>> strata;
-  for (int m = 0; m < M; ++m) strata[fit_.cluster_strata[m]].push_back(m);
+  for (int m = 0; m < M; ++m) strata[fit_.clusters[m].stratum].push_back(m);
   Eigen::MatrixXd C = Eigen::MatrixXd::Zero(q, q);
   std::vector<std::pair<double, int>> shares;  // (trace, M_l - 1)
   for (const auto& [stratum, members] : strata) {
@@ -373,7 +502,8 @@ ColumnTest ColumnTester::Test(const std::vector<int>& tested, const Eigen::Vecto
   t.statistic = std::max(0.0, T2 * (nu - q + 1) / (q * nu));
   t.p_value = FSurvival(t.statistic, q, nu - q + 1);
   t.covariance_dof = nu;
-  const int dof = std::max(1, fit_.num_residuals - static_cast<int>(nuisance_.size()) - q);
+  const int dof =
+      std::max(1, fit_.num_residuals - fit_.num_state_columns - static_cast<int>(nuisance_.size()) - q);
   const double sigma2 = fit_.rss / dof;
   t.white_statistic = values == nullptr ? t.predicted_rss_drop / q / sigma2
                                         : values->dot(S * *values) / q / sigma2;
@@ -381,23 +511,24 @@ ColumnTest ColumnTester::Test(const std::vector<int>& tested, const Eigen::Vecto
   return t;
 }
 
-std::vector<int> ColumnsExcept(const LinearisedFit& fit, const std::vector<std::string>& parameters) {
+std::vector<int> ParametersExcept(const LinearisedFit& fit,
+                                  const std::vector<std::string>& parameters) {
   std::vector<int> out;
-  for (int c = 0; c < fit.num_state_columns; ++c) out.push_back(c);
-  for (size_t k = 0; k < fit.parameter_names.size(); ++k) {
+  for (int k = 0; k < fit.NumParameters(); ++k) {
     if (std::find(parameters.begin(), parameters.end(), fit.parameter_names[k]) == parameters.end()) {
-      out.push_back(fit.num_state_columns + static_cast<int>(k));
+      out.push_back(k);
     }
   }
   return out;
 }
 
-std::vector<int> ParameterColumns(const LinearisedFit& fit, const std::vector<std::string>& parameters) {
+std::vector<int> ParameterIndices(const LinearisedFit& fit,
+                                  const std::vector<std::string>& parameters) {
   std::vector<int> out;
   for (const std::string& name : parameters) {
-    const int c = fit.ParameterColumn(name);
-    CHECK_GE(c, 0) << name << " is not free in the linearised fit";
-    out.push_back(c);
+    const int k = fit.ParameterIndex(name);
+    CHECK_GE(k, 0) << name << " is not free in the linearised fit";
+    out.push_back(k);
   }
   return out;
 }

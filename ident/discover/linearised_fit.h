@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 
+#include "dynamics/state.h"
 #include "dynamics/vehicle.h"
 #include "ident/estimation_log.h"
 #include "ident/noise_weights.h"
@@ -32,20 +33,49 @@
 namespace coaxid {
 
 struct LinearisedFit {
-  int num_state_columns = 0;                // segment start states, 12 per segment, first
-  std::vector<std::string> parameter_names;  // free parameters, the columns after the states
-  Eigen::VectorXd parameter_scales;         // their scales (column = d r / d(value / scale))
-  Eigen::MatrixXd normal;                   // N = J^T J (all columns)
-  Eigen::VectorXd gradient;                 // b = J^T r
-  std::vector<Eigen::VectorXd> cluster_gradients;  // b_c per cluster
-  std::vector<int> cluster_residuals;       // residuals per cluster
-  std::vector<int> cluster_strata;          // log index of each cluster
-  double rss = 0;                           // r^T r
+  // Columns: the segment start states, kNumStates per segment in log order,
+  // then the free parameters (scaled: column = d r / d(value / scale)).
+  int num_state_columns = 0;
+  std::vector<std::string> parameter_names;
+  Eigen::VectorXd parameter_scales;
+  // N = J^T J by blocks. A segment's start state enters its own rows and the
+  // continuity tie to the next segment of its log, nothing else, so N_ss is
+  // block tridiagonal: memory and work grow linearly with the log's length
+  // (a dense N of a 20-minute flight's 1200 segments held 14,000^2 entries).
+  using StateBlock = Eigen::Matrix<double, kNumStates, kNumStates>;
+  std::vector<StateBlock> state_diagonal;  // N_jj, per segment
+  std::vector<StateBlock> state_next;      // N_j,j+1 (zero for a log's last segment)
+  Eigen::MatrixXd state_parameter;         // N_s,theta (state columns x parameters)
+  Eigen::MatrixXd parameter_normal;        // N_theta,theta
+  Eigen::VectorXd gradient;                // b = J^T r, every column
+  // b_c = J_c^T r_c of one cluster. It is zero outside its segment's states
+  // (and the next segment's, for the cluster that holds the tie) and the
+  // parameters.
+  struct Cluster {
+    int first_state_column = 0;
+    Eigen::VectorXd states;      // b_c on the columns from first_state_column (empty: a balance hold)
+    Eigen::VectorXd parameters;  // b_c on the parameter columns
+    int residuals = 0;
+    int stratum = 0;             // index of its log
+  };
+  std::vector<Cluster> clusters;
+  double rss = 0;                // r^T r
   int num_residuals = 0;
 
-  int NumColumns() const { return static_cast<int>(normal.rows()); }
-  // Column of a free parameter, or -1.
-  int ParameterColumn(const std::string& name) const;
+  // An empty fit (N = 0, no cluster) over these columns.
+  LinearisedFit() = default;
+  LinearisedFit(int num_segments, std::vector<std::string> names, Eigen::VectorXd scales);
+
+  int NumColumns() const { return num_state_columns + NumParameters(); }
+  int NumParameters() const { return static_cast<int>(parameter_names.size()); }
+  // Index of a free parameter among parameter_names, or -1.
+  int ParameterIndex(const std::string& name) const;
+  // Adds a residual block's J^T J, given over `columns` (its local order;
+  // the states of one segment or of two neighbours, and parameters).
+  void AddNormal(const std::vector<int>& columns, const Eigen::MatrixXd& block);
+  // Adds a cluster: its J^T r over `columns`, as AddNormal; also to `gradient`.
+  void AddCluster(const std::vector<int>& columns, const Eigen::VectorXd& block_gradient,
+                  int residuals, int stratum);
 };
 
 // Linearises the problem of `vehicle`'s free parameters on `logs` at the
@@ -99,25 +129,33 @@ struct ColumnTest {
 
 class ColumnTester {
  public:
-  // nuisance: columns estimated under the null (states and parameters).
+  // nuisance: the parameters (indices into fit.parameter_names) estimated
+  // under the null; every segment state is estimated too.
   ColumnTester(const LinearisedFit& fit, const std::vector<int>& nuisance);
-  // values_scaled: null for the score test, else the group's scaled values (Wald).
+  // tested: parameter indices. values_scaled: null for the score test, else
+  // the group's scaled values (Wald).
   ColumnTest Test(const std::vector<int>& tested, const Eigen::VectorXd* values_scaled = nullptr) const;
 
  private:
   const LinearisedFit& fit_;
   std::vector<int> nuisance_;
+  // The states projected out first (block-tridiagonal elimination, exact
+  // nested projection): the parameters' normal matrix and cluster scores
+  //   N~ = N_tt - N_ts N_ss^-1 N_st,   b~_c = b_c[theta] - N_ts N_ss^-1 b_c[s].
+  Eigen::MatrixXd reduced_normal_;
+  Eigen::MatrixXd reduced_scores_;  // b~_c, one column per cluster
+  // N~_00^+ = D^-1 V diag(1 / lambda) V^T D^-1, D^2 the diagonal of the
+  // nuisance parameters' own N (so the rank threshold counts what the states
+  // leave of each column).
   int rank_ = 0;
-  // N_00^+ = D^-1 V diag(1 / lambda) V^T D^-1 on the Jacobi-scaled nuisance block.
   Eigen::VectorXd inverse_scale_;  // D^-1
   Eigen::MatrixXd basis_;          // V, rank_ columns
   Eigen::VectorXd inverse_eigenvalues_;
 };
 
-// Every column of a linearised fit (segment states and parameters) except the
-// listed parameters'.
-std::vector<int> ColumnsExcept(const LinearisedFit& fit, const std::vector<std::string>& parameters);
-// Columns of the listed parameters (every name must be free in the fit).
-std::vector<int> ParameterColumns(const LinearisedFit& fit, const std::vector<std::string>& parameters);
+// Indices of every free parameter of a linearised fit except the listed ones.
+std::vector<int> ParametersExcept(const LinearisedFit& fit, const std::vector<std::string>& parameters);
+// Indices of the listed parameters (every name must be free in the fit).
+std::vector<int> ParameterIndices(const LinearisedFit& fit, const std::vector<std::string>& parameters);
 
 }  // namespace coaxid
