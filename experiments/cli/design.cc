@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 
 #include <gflags/gflags.h>
@@ -38,6 +39,11 @@ DEFINE_string(design_bands, "0.1:0.5,0.5:1.5,1.5:4",
               "design: the multisine's frequency bands [Hz], LOW:HIGH,... (each input gets an rms "
               "per band)");
 DEFINE_bool(design_excitation, true, "design: design the flight's excitation");
+DEFINE_string(design_signal, "multisine",
+              "design: the excitation designed, multisine (shaped by --design_bands) or 3211 "
+              "(pulse width among --design_pulse_widths_s and level per input)");
+DEFINE_string(design_pulse_widths_s, "0.1,0.15,0.25,0.4,0.6,1",
+              "design: the 3211's unit pulse widths tried [s]");
 DEFINE_double(quiet_after_waypoint_s, 3.0,
               "design: the excitation is off from 0.5 s before each waypoint change to this long "
               "after it (0: always on)");
@@ -56,6 +62,7 @@ const char* const kDesignUsage =
     "usage: coaxid design --config=F --scenario=S[,S2...] --out=DIR [--design_parameters=Cz,sigma0]\n"
     "       [--criterion=D|A] [--max_attitude_rad=R] [--max_rotor_speed_deviation_rad_s=W]\n"
     "       [--max_swashplate_rad=D] [--max_height_deviation_m=H] [--design_bands=0.1:0.5,0.5:1.5,1.5:4] [--add_holds=N]\n"
+    "       [--design_signal=multisine|3211] [--design_pulse_widths_s=0.1,0.15,0.25,0.4,0.6,1]\n"
     "       [--design_excitation=false] [--quiet_after_waypoint_s=3] [--design_at=config|truth]\n";
 
 std::vector<FrequencyBand> ParseBands(const std::string& text) {
@@ -118,6 +125,23 @@ int RunDesign() {
   if (!(FLAGS_segment_s > 0)) throw InputError("--segment_s must be positive");
   ExcitationDesignOptions excitation_options;
   excitation_options.bands = ParseBands(FLAGS_design_bands);
+  if (FLAGS_design_signal == "3211") {
+    excitation_options.excitation = Excitation::Type::k3211;
+  } else if (FLAGS_design_signal != "multisine") {
+    throw InputError("--design_signal: '" + FLAGS_design_signal + "' is not multisine or 3211");
+  }
+  excitation_options.pulse_widths_s.clear();
+  for (const std::string& part : SplitList(FLAGS_design_pulse_widths_s)) {
+    char* end = nullptr;
+    const double width = std::strtod(part.c_str(), &end);
+    if (end == part.c_str() || *end != '\0' || !(width > 0)) {
+      throw InputError("--design_pulse_widths_s: '" + part + "' is not a positive width in s");
+    }
+    excitation_options.pulse_widths_s.push_back(width);
+  }
+  if (excitation_options.pulse_widths_s.empty()) {
+    throw InputError("--design_pulse_widths_s: no width given");
+  }
   if (!(FLAGS_quiet_after_waypoint_s >= 0)) throw InputError("--quiet_after_waypoint_s must be >= 0");
   excitation_options.quiet_after_waypoint_s = FLAGS_quiet_after_waypoint_s;
   excitation_options.limits.max_attitude_rad = LimitFlag(FLAGS_max_attitude_rad);

@@ -63,9 +63,20 @@ YAML::Node ShortestNumber(double v) {
 
 YAML::Node ExcitationNode(const Excitation& e) {
   YAML::Node node;
-  node["type"] = "multisine";
+  const bool pulses = e.type == Excitation::Type::k3211;
+  node["type"] = pulses ? "3211" : "multisine";
   node["start_s"] = ShortestNumber(e.start_s);
-  node["period_s"] = ShortestNumber(e.period_s);
+  if (pulses) {
+    node["pulse_s"] = ShortestNumber(e.pulse_s);
+    YAML::Node amplitude(YAML::NodeType::Map);
+    for (const char* input : {"omega1", "omega2", "delta_cx", "delta_cy"}) {
+      amplitude[input] = ShortestNumber(e.amplitude.at(input));
+    }
+    amplitude.SetStyle(YAML::EmitterStyle::Flow);
+    node["amplitude"] = amplitude;
+  } else {
+    node["period_s"] = ShortestNumber(e.period_s);
+  }
   YAML::Node bands(YAML::NodeType::Sequence);
   for (const Excitation::Band& band : e.bands) {
     YAML::Node b;
@@ -80,7 +91,7 @@ YAML::Node ExcitationNode(const Excitation& e) {
     b.SetStyle(YAML::EmitterStyle::Flow);
     bands.push_back(b);
   }
-  node["bands"] = bands;
+  if (!pulses) node["bands"] = bands;
   if (!e.quiet.empty()) {
     YAML::Node quiet(YAML::NodeType::Sequence);
     for (const auto& window : e.quiet) {
@@ -296,12 +307,20 @@ nlohmann::json DesignJson(const DesignRun& run) {
   if (run.excitation) {
     const ExcitationDesign& d = *run.excitation;
     nlohmann::json components = nlohmann::json::array();
+    const bool pulses = d.type == Excitation::Type::k3211;
     for (const auto& c : d.components) {
-      components.push_back({{"channel", c.channel},
-                            {"min_hz", c.band.min_hz},
-                            {"max_hz", c.band.max_hz},
-                            {"planned_rms", c.planned_rms},
-                            {"designed_rms", c.designed_rms}});
+      if (pulses) {
+        components.push_back({{"channel", c.channel},
+                              {"pulse_s", d.pulse_s},
+                              {"planned_level", c.planned_level},
+                              {"designed_level", c.designed_level}});
+      } else {
+        components.push_back({{"channel", c.channel},
+                              {"min_hz", c.band.min_hz},
+                              {"max_hz", c.band.max_hz},
+                              {"planned_rms", c.planned_rms},
+                              {"designed_rms", c.designed_rms}});
+      }
     }
     nlohmann::json rounds = nlohmann::json::array();
     for (const auto& r : d.rounds) {
@@ -403,11 +422,24 @@ std::string DesignMarkdown(const DesignRun& run, const std::vector<std::string>&
                   a.max_swashplate_rad, b.max_swashplate_rad, d.limits.max_height_deviation_m,
                   a.max_height_deviation_m, b.max_height_deviation_m);
     md += text;
-    md += "| input | band [Hz] | designed rms |\n|---|---|---|\n";
-    for (const auto& c : d.components) {
-      std::snprintf(text, sizeof text, "| %s | %g-%g | %.3g |\n", c.channel.c_str(),
-                    c.band.min_hz, c.band.max_hz, c.designed_rms);
+    if (d.type == Excitation::Type::k3211) {
+      std::snprintf(text, sizeof text,
+                    "A 3211 pulse train, unit pulse %.3g s (inputs take turns, 10 units each).\n\n",
+                    d.pulse_s);
       md += text;
+      md += "| input | planned level | designed level |\n|---|---|---|\n";
+      for (const auto& c : d.components) {
+        std::snprintf(text, sizeof text, "| %s | %.3g | %.3g |\n", c.channel.c_str(),
+                      c.planned_level, c.designed_level);
+        md += text;
+      }
+    } else {
+      md += "| input | band [Hz] | designed rms |\n|---|---|---|\n";
+      for (const auto& c : d.components) {
+        std::snprintf(text, sizeof text, "| %s | %g-%g | %.3g |\n", c.channel.c_str(),
+                      c.band.min_hz, c.band.max_hz, c.designed_rms);
+        md += text;
+      }
     }
     md += "\nThe excitation as a time series to add to the controller's outputs: "
           "`designed_excitation.csv` (t, omega1, omega2 [rad/s], delta_cx, delta_cy [rad]).\n";

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -202,11 +203,18 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
   if (out.flight_index < 0) {
     throw InputError("an excitation is designed for a flight: the plan has no flight scenario");
   }
-  if (options.bands.empty()) throw InputError("the excitation design needs at least one band");
+  const bool multisine = options.excitation == Excitation::Type::kMultisine;
+  if (!multisine && options.excitation != Excitation::Type::k3211) {
+    throw InputError("the excitation design makes a multisine or a 3211");
+  }
+  out.type = options.excitation;
+  if (multisine && options.bands.empty()) {
+    throw InputError("the excitation design needs at least one band");
+  }
   const int fi = out.flight_index;
   const Excitation& reference_excitation = plan[fi].flight.excitation;
   const double df = 1.0 / reference_excitation.period_s;
-  for (const FrequencyBand& band : options.bands) {
+  for (const FrequencyBand& band : multisine ? options.bands : std::vector<FrequencyBand>{}) {
     if (!(band.min_hz > 0 && band.max_hz > band.min_hz)) {
       throw InputError("design band: need 0 < min_hz < max_hz");
     }
@@ -283,9 +291,9 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
   // The start: the planned excitation's power per input, spread over the
   // bands in proportion to the harmonics each input gets there (a flat
   // spectrum like the planned multisine's).
-  const int B = static_cast<int>(options.bands.size()), K = 4 * B;
+  const int B = multisine ? static_cast<int>(options.bands.size()) : 0, K = 4 * B;
   std::vector<double> unit_rms(K);  // t_k = (rms_k / unit_rms_k)^2
-  {
+  if (multisine) {
     const ExcitationSignal planned_signal(reference_excitation);
     const double default_rms[4] = {2.0, 2.0, 0.01, 0.01};
     const int samples = 4000;
@@ -322,11 +330,15 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
       }
     }
   }
-  auto design_of = [&](const Eigen::VectorXd& t) {
-    std::vector<double> rms(K);
-    for (int k = 0; k < K; ++k) rms[k] = unit_rms[k] * std::sqrt(std::max(t[k], 0.0));
-    return WithExcitation(plan, fi, BandExcitation(reference_excitation, options.bands, rms, quiet));
-  };
+  // The plan flown with the design of variables t (powers: every peak grows
+  // about as sqrt(t)); the 3211 search replaces it for each pulse width.
+  std::function<std::vector<Scenario>(const Eigen::VectorXd&)> design_of =
+      [&](const Eigen::VectorXd& t) {
+        std::vector<double> rms(K);
+        for (int k = 0; k < K; ++k) rms[k] = unit_rms[k] * std::sqrt(std::max(t[k], 0.0));
+        return WithExcitation(plan, fi,
+                              BandExcitation(reference_excitation, options.bands, rms, quiet));
+      };
   struct Point {
     Eigen::VectorXd t;
     Evaluation flown;
@@ -396,6 +408,84 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
     if (p.flew && p.within && p.criterion < best.criterion) best = p;
     return best.flew ? best : p;
   };
+  if (!multisine) {
+    // A 3211 train: each pulse width of the grid whose four-input cycle (40
+    // units) fits the excitation time, flown at the planned levels scaled to
+    // the limits; then, at the best width, each input's share of the power
+    // doubled or halved (and flown to the limits again) while that helps.
+    std::array<double, 4> planned_level;
+    const double default_level[4] = {4.0, 4.0, 0.02, 0.02};
+    for (int c = 0; c < 4; ++c) {
+      const auto it = reference_excitation.amplitude.find(kInputs[c]);
+      planned_level[c] = it != reference_excitation.amplitude.end() && it->second > 0
+                             ? it->second
+                             : default_level[c];
+    }
+    auto train = [&](double width) {
+      return [&, width](const Eigen::VectorXd& t) {
+        Excitation e;
+        e.type = Excitation::Type::k3211;
+        e.start_s = reference_excitation.start_s;
+        e.pulse_s = width;
+        e.quiet = quiet;
+        for (int c = 0; c < 4; ++c) e.amplitude[kInputs[c]] = planned_level[c] * std::sqrt(std::max(t[c], 0.0));
+        return WithExcitation(plan, fi, e);
+      };
+    };
+    const double room_s = plan[fi].flight.duration_s - reference_excitation.start_s;
+    Point best;
+    double best_width = 0;
+    for (double width : options.pulse_widths_s) {
+      if (!(width > 0) || 40 * width > room_s) continue;
+      say(Format("3211 with %.3g s pulses", width));
+      design_of = train(width);
+      const Point p = fly_to_limits(Eigen::VectorXd::Ones(4), NAN);
+      if (p.flew && p.within && p.criterion < best.criterion) {
+        best = p;
+        best_width = width;
+      }
+    }
+    if (!(best_width > 0)) {
+      throw ComputationError(Format("no 3211 of the pulse widths given both fits the %.3g s of "
+                                    "excitation (a cycle of the four inputs is 40 pulse widths) "
+                                    "and stays within the limits",
+                                    room_s));
+    }
+    design_of = train(best_width);
+    for (int pass = 0, improved = 1; improved && pass < options.max_rounds; ++pass) {
+      improved = 0;
+      for (int c = 0; c < 4; ++c) {
+        for (double factor : {2.0, 0.5}) {
+          Eigen::VectorXd t = best.t;
+          t[c] *= factor;
+          say(Format("3211 with %.3g s pulses: input %g's share x %g", best_width, c + 1, factor));
+          const Point p = fly_to_limits(t, NAN);
+          if (p.flew && p.within && p.criterion < best.criterion) {
+            best = p;
+            improved = 1;
+            break;
+          }
+        }
+      }
+    }
+    out.pulse_s = best_width;
+    out.designed = design_of(best.t);
+    out.designed_run = std::move(best.flown.run);
+    out.after = std::move(best.flown.precision);
+    out.criterion_after = best.criterion;
+    for (int c = 0; c < 4; ++c) {
+      ExcitationDesign::Component component;
+      component.channel = kInputs[c];
+      component.planned_level = planned_level[c];
+      component.designed_level = planned_level[c] * std::sqrt(std::max(best.t[c], 0.0));
+      out.components.push_back(component);
+    }
+    out.seconds = SecondsSince(start);
+    say(Format("done: 3211 with %.3g s pulses, criterion %.4g -> %.4g", best_width,
+               out.criterion_before, out.criterion_after));
+    return out;
+  }
+
   Point current = fly_to_limits(Eigen::VectorXd::Ones(K), NAN);
   if (!(current.flew && current.within)) {
     throw ComputationError("even a weak multisine leaves the limits: the limits leave the "
@@ -495,8 +585,12 @@ ExcitationDesign DesignExcitation(const Vehicle& vehicle, const std::vector<Scen
   for (int c = 0; c < 4; ++c) {
     for (int b2 = 0; b2 < B; ++b2) {
       const int k = c * B + b2;
-      out.components.push_back({kInputs[c], options.bands[b2], unit_rms[k],
-                                unit_rms[k] * std::sqrt(std::max(current.t[k], 0.0))});
+      ExcitationDesign::Component component;
+      component.channel = kInputs[c];
+      component.band = options.bands[b2];
+      component.planned_rms = unit_rms[k];
+      component.designed_rms = unit_rms[k] * std::sqrt(std::max(current.t[k], 0.0));
+      out.components.push_back(component);
     }
   }
   out.seconds = SecondsSince(start);

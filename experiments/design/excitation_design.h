@@ -50,7 +50,12 @@ struct FrequencyBand {
 };
 
 struct ExcitationDesignOptions {
+  // What is designed: a multisine shaped by frequency band (kMultisine), or
+  // a 3211 pulse train (k3211): its unit pulse width, among pulse_widths_s,
+  // and its pulse level per input.
+  Excitation::Type excitation = Excitation::Type::kMultisine;
   std::vector<FrequencyBand> bands{{0.1, 0.5}, {0.5, 1.5}, {1.5, 4.0}};
+  std::vector<double> pulse_widths_s{0.1, 0.15, 0.25, 0.4, 0.6, 1.0};
   DesignLimits limits;
   // The design aims at this share of each limit (the sensor noise
   // the controller feeds back moves the peaks from flight to flight).
@@ -67,6 +72,8 @@ struct ExcitationDesignOptions {
 
 struct ExcitationDesign {
   int flight_index = 0;                 // the designed scenario among the planned ones
+  Excitation::Type type = Excitation::Type::kMultisine;  // what was designed
+  double pulse_s = 0;                   // 3211: the unit pulse width chosen
   std::vector<Scenario> reference, designed;
   SimulatedExperiment reference_run, designed_run;
   PredictedPrecision before, after;
@@ -74,9 +81,11 @@ struct ExcitationDesign {
   DesignLimits limits;                  // as applied (NaN resolved)
   struct Component {
     std::string channel;
-    FrequencyBand band;
-    double planned_rms = 0;   // the planned excitation's power in this band (t = 1)
+    FrequencyBand band;       // multisine
+    double planned_rms = 0;   // multisine: the planned excitation's power in this band (t = 1)
     double designed_rms = 0;
+    double planned_level = 0;   // 3211: pulse level (rad/s for rotor speeds, rad for angles)
+    double designed_level = 0;
   };
   std::vector<Component> components;
   struct Round {

@@ -34,6 +34,9 @@ TEST_F(DesignCliTest, BadInputExitsTwoAndWritesNothing) {
       // Flight logs alone hold d for the scale: it cannot be designed for.
       {Design(flight_, out, "--design_parameters=d"), "held for the scale"},
       {Design(flight_, out, "--design_bands=1:0.5"), "--design_bands"},
+      {Design(flight_, out, "--design_signal=chirp"), "--design_signal"},
+      {Design(flight_, out, "--design_signal=3211 --design_pulse_widths_s=0.2,-1"),
+       "--design_pulse_widths_s"},
       {Design(balance_, out, "--add_holds=1 --max_swashplate_rad=0.3"), "0.2 rad"},
       {Design(Path("missing.yaml"), out), "missing.yaml"},
   };

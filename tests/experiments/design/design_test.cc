@@ -211,5 +211,48 @@ TEST(ExcitationDesign, KeepsTheLimitsAndImprovesOnThePlan) {
   EXPECT_EQ(parsed.flight.excitation.quiet.size(), 1u);  // around the waypoint change
 }
 
+
+// The 3211 option: a pulse width that fits the flight (a cycle of the four
+// inputs is 40 widths; 0.5 s does not fit 18 s of excitation), the limits
+// kept, and the file read back flies the designed flight.
+TEST(ExcitationDesign, A3211KeepsTheLimitsAndFitsItsCycleInTheFlight) {
+  const Vehicle vehicle = RandomTruth(Nominal(), 23);
+  Scenario flight = LoadScenario(std::string(COAXID_SOURCE_DIR) + "/configs/scenarios/flight.yaml");
+  flight.flight.duration_s = 20;
+  flight.flight.waypoints = {Waypoint{0, 0, 0, 1.5, 0}, Waypoint{10, 0.3, 0, 1.7, 0.1}};
+  DesignCriterion criterion;
+  criterion.parameters = {"Cz", "sigma0"};
+  ExcitationDesignOptions options;
+  options.excitation = Excitation::Type::k3211;
+  options.pulse_widths_s = {0.1, 0.2, 0.5};
+  options.max_rounds = 1;
+  options.output_error.segment_schedule_s = {1.0};
+  options.limits.max_attitude_rad = 0.05;
+  const ExcitationDesign design = DesignExcitation(vehicle, {flight}, criterion, options);
+  EXPECT_TRUE(design.pulse_s == 0.1 || design.pulse_s == 0.2) << design.pulse_s;
+  const Excitation& e = design.designed[0].flight.excitation;
+  EXPECT_EQ(e.type, Excitation::Type::k3211);
+  EXPECT_EQ(e.pulse_s, design.pulse_s);
+  const FlightEnvelope& envelope = design.designed_run.envelopes[0];
+  EXPECT_LE(envelope.max_attitude_rad, 0.05);
+  EXPECT_LE(envelope.max_rotor_speed_deviation_rad_s, design.limits.max_rotor_speed_deviation_rad_s);
+  EXPECT_LE(envelope.max_swashplate_rad, design.limits.max_swashplate_rad);
+  EXPECT_LE(envelope.max_height_deviation_m, design.limits.max_height_deviation_m);
+  ASSERT_EQ(design.components.size(), 4u);
+  for (const auto& c : design.components) {
+    EXPECT_NEAR(c.designed_level, e.amplitude.at(c.channel), 1e-12 * c.designed_level);
+  }
+  const Scenario parsed =
+      ParseScenario(DesignedScenarioYaml("flight", design.designed[0]), "designed.yaml");
+  FlightScenario replay = design.designed[0].flight;
+  replay.excitation = parsed.flight.excitation;
+  const Log a = SimulateFlight(vehicle, design.designed[0].flight, design.designed[0].seed);
+  const Log b = SimulateFlight(vehicle, replay, design.designed[0].seed);
+  ASSERT_EQ(a.values, b.values);
+
+  options.pulse_widths_s = {0.5, 1.0};  // no cycle fits
+  EXPECT_THROW(DesignExcitation(vehicle, {flight}, criterion, options), ComputationError);
+}
+
 }  // namespace
 }  // namespace coaxid
