@@ -254,10 +254,14 @@ CandidatePass LinearisePass(const Vehicle& fitted, const OutputErrorResult& fit,
   pass.fit = fit;
   const std::vector<std::string> present = fitted.EffectNames();
   Vehicle augmented = AsTheFitHeldIt(fitted, fit);
+  std::map<std::string, double> absent;  // parameters linearised beside absence
   for (const EffectInfo& info : EffectLibrary()) {
     if (std::find(present.begin(), present.end(), info.name) != present.end()) continue;
     pass.candidates.push_back(info.name);
     augmented = CandidateVehicle(augmented, info.name);
+    for (const auto& spec : info.parameters) {
+      if (std::isfinite(spec.linearise_at)) absent[info.name + "." + spec.name] = spec.value;
+    }
   }
   std::vector<int> cluster_rows;
   for (size_t i = 0; i < logs.size(); ++i) {
@@ -266,7 +270,7 @@ CandidatePass LinearisePass(const Vehicle& fitted, const OutputErrorResult& fit,
                                : 1);
   }
   std::string why;
-  if (!LineariseFit(augmented, logs, fit.segments, fit.noise, cluster_rows, fit_options,
+  if (!LineariseFit(augmented, logs, fit.segments, fit.noise, cluster_rows, fit_options, absent,
                     &pass.linearised, &why)) {
     throw ComputationError("linearising the fit for the candidate tests: " + why);
   }

@@ -21,6 +21,9 @@ namespace {
 struct ClusterJob {
   std::unique_ptr<ceres::CostFunction> cost;
   std::vector<const double*> blocks;
+  // Where the residual is taken, when not at `blocks` (residual_values of
+  // LineariseFit): same blocks, other parameter values.
+  std::vector<const double*> residual_blocks;
   std::vector<int> block_columns;  // first column of each parameter block
   std::vector<int> cluster_ends;   // residual index ending each cluster (the last = all)
   int stratum = 0;
@@ -69,6 +72,10 @@ void Evaluate(ClusterJob* job) {
   }
   Eigen::VectorXd r(R);
   if (!cost.Evaluate(job->blocks.data(), r.data(), jacobians.data()) || !r.allFinite()) return;
+  if (!job->residual_blocks.empty() &&
+      (!cost.Evaluate(job->residual_blocks.data(), r.data(), nullptr) || !r.allFinite())) {
+    return;
+  }
   Eigen::MatrixXd J(R, width);
   int offset = 0;
   for (size_t b = 0; b < sizes.size(); ++b) {
@@ -202,11 +209,20 @@ int ClusterRows(const EstimationLog& log, const Eigen::MatrixXd& prediction) {
 bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
                   const std::vector<FittedSegments>& segments, const NoiseWeights& noise,
                   const std::vector<int>& cluster_rows, const OutputErrorOptions& options,
-                  LinearisedFit* out, std::string* why) {
+                  const std::map<std::string, double>& residual_values, LinearisedFit* out,
+                  std::string* why) {
   CHECK_EQ(logs.size(), segments.size());
   CHECK_EQ(logs.size(), cluster_rows.size());
   const FreeParameters free(vehicle.parameters);
   const Eigen::VectorXd theta_scaled = free.ScaledValues();
+  Eigen::VectorXd theta_residual = theta_scaled;
+  for (const auto& [name, value] : residual_values) {
+    const auto it = std::find(free.names().begin(), free.names().end(), name);
+    CHECK(it != free.names().end()) << name << " is not free in the linearised problem";
+    const int k = static_cast<int>(it - free.names().begin());
+    theta_residual[k] = value / free.scales()[k];
+  }
+  const bool residual_elsewhere = !residual_values.empty();
   int state_columns = 0;
   for (const FittedSegments& s : segments) state_columns += kNumStates * s.starts.size();
   const int theta_column = state_columns;
@@ -227,6 +243,7 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
         job.cost = std::make_unique<BalanceRowsCost>(vehicle.model, free, log, first, end,
                                                      channel_std);
         job.blocks = {theta_scaled.data()};
+        if (residual_elsewhere) job.residual_blocks = {theta_residual.data()};
         job.block_columns = {theta_column};
         job.cluster_ends = {job.cost->num_residuals()};
         job.stratum = static_cast<int>(i);
@@ -253,6 +270,10 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
       if (has_next) {
         job.blocks.push_back(seg.states[j + 1].data());
         job.block_columns.push_back(segment_column + kNumStates * static_cast<int>(j + 1));
+      }
+      if (residual_elsewhere) {
+        job.residual_blocks = job.blocks;
+        job.residual_blocks[1] = theta_residual.data();
       }
       jobs.push_back(std::move(job));
     }

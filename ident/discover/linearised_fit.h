@@ -19,6 +19,7 @@
 // the fitted trajectory (CVODES, the same costs as the fit).
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -83,10 +84,18 @@ struct LinearisedFit {
 // FittedSegments per log, empty for balance logs; from OutputErrorResult).
 // False with the reason if a segment cannot be simulated.
 // cluster_rows: rows per cluster of each flight log (ignored for balance logs).
+// residual_values: free parameters whose Jacobian columns are taken at the
+// vehicle's values but whose residual r is taken at these (a lag has no
+// derivative at its absence, T = 0: its column comes from just beside it,
+// while r must stay the fit's own, every candidate absent; measured: with
+// the lags' 2 ms in r, a 20-minute flight with no undeclared effect had
+// motor_lag, servo_lag, rotor_damping and wind pass at F 170-2000, each
+// undoing the inserted lags).
 bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
                   const std::vector<FittedSegments>& segments, const NoiseWeights& noise,
                   const std::vector<int>& cluster_rows, const OutputErrorOptions& options,
-                  LinearisedFit* out, std::string* why);
+                  const std::map<std::string, double>& residual_values, LinearisedFit* out,
+                  std::string* why);
 
 // Rows per cluster for a flight log whose model outputs are `prediction`:
 // three times the largest integrated autocorrelation time of its channels'
