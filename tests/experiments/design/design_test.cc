@@ -180,6 +180,27 @@ TEST(BalanceDesign, AddsTheHoldsTheLinearMethodNeedsAndNoStdGrows) {
 // A 20 s flight with a waypoint change: the designed excitation, flown in
 // the closed loop, stays within the limits, improves the criterion on the
 // plan, and its scenario file flies the same flight.
+// The designed flight's peaks against the limits the design applied.
+void ExpectWithinLimits(const ExcitationDesign& design) {
+  const FlightEnvelope& e = design.designed_run.envelopes[0];
+  EXPECT_LE(e.max_attitude_rad, design.limits.max_attitude_rad);
+  EXPECT_LE(e.max_rotor_speed_deviation_rad_s, design.limits.max_rotor_speed_deviation_rad_s);
+  EXPECT_LE(e.max_swashplate_rad, design.limits.max_swashplate_rad);
+  EXPECT_LE(e.max_height_deviation_m, design.limits.max_height_deviation_m);
+}
+
+// The designed scenario file, read back and flown, is the designed flight.
+Scenario ExpectTheFileFliesTheDesign(const Vehicle& vehicle, const ExcitationDesign& design) {
+  const Scenario parsed =
+      ParseScenario(DesignedScenarioYaml("flight", design.designed[0]), "designed.yaml");
+  FlightScenario replay = design.designed[0].flight;
+  replay.excitation = parsed.flight.excitation;
+  const Log a = SimulateFlight(vehicle, design.designed[0].flight, design.designed[0].seed);
+  const Log b = SimulateFlight(vehicle, replay, design.designed[0].seed);
+  EXPECT_EQ(a.values, b.values);
+  return parsed;
+}
+
 TEST(ExcitationDesign, KeepsTheLimitsAndImprovesOnThePlan) {
   const Vehicle vehicle = RandomTruth(Nominal(), 19);
   Scenario flight = LoadScenario(std::string(COAXID_SOURCE_DIR) + "/configs/scenarios/flight.yaml");
@@ -194,20 +215,9 @@ TEST(ExcitationDesign, KeepsTheLimitsAndImprovesOnThePlan) {
   options.output_error.segment_schedule_s = {1.0};
   options.limits.max_attitude_rad = 0.05;
   const ExcitationDesign design = DesignExcitation(vehicle, {flight}, criterion, options);
-  const FlightEnvelope& e = design.designed_run.envelopes[0];
-  EXPECT_LE(e.max_attitude_rad, 0.05);
-  EXPECT_LE(e.max_rotor_speed_deviation_rad_s, design.limits.max_rotor_speed_deviation_rad_s);
-  EXPECT_LE(e.max_swashplate_rad, design.limits.max_swashplate_rad);
-  EXPECT_LE(e.max_height_deviation_m, design.limits.max_height_deviation_m);
+  ExpectWithinLimits(design);
   EXPECT_LT(design.criterion_after, design.criterion_before);
-  // The file, read back and flown, is the designed flight.
-  const Scenario parsed =
-      ParseScenario(DesignedScenarioYaml("flight", design.designed[0]), "designed.yaml");
-  FlightScenario replay = design.designed[0].flight;
-  replay.excitation = parsed.flight.excitation;
-  const Log a = SimulateFlight(vehicle, design.designed[0].flight, design.designed[0].seed);
-  const Log b = SimulateFlight(vehicle, replay, design.designed[0].seed);
-  ASSERT_EQ(a.values, b.values);
+  const Scenario parsed = ExpectTheFileFliesTheDesign(vehicle, design);
   EXPECT_EQ(parsed.flight.excitation.quiet.size(), 1u);  // around the waypoint change
 }
 
@@ -233,22 +243,12 @@ TEST(ExcitationDesign, A3211KeepsTheLimitsAndFitsItsCycleInTheFlight) {
   const Excitation& e = design.designed[0].flight.excitation;
   EXPECT_EQ(e.type, Excitation::Type::k3211);
   EXPECT_EQ(e.pulse_s, design.pulse_s);
-  const FlightEnvelope& envelope = design.designed_run.envelopes[0];
-  EXPECT_LE(envelope.max_attitude_rad, 0.05);
-  EXPECT_LE(envelope.max_rotor_speed_deviation_rad_s, design.limits.max_rotor_speed_deviation_rad_s);
-  EXPECT_LE(envelope.max_swashplate_rad, design.limits.max_swashplate_rad);
-  EXPECT_LE(envelope.max_height_deviation_m, design.limits.max_height_deviation_m);
+  ExpectWithinLimits(design);
   ASSERT_EQ(design.components.size(), 4u);
   for (const auto& c : design.components) {
     EXPECT_NEAR(c.designed_level, e.amplitude.at(c.channel), 1e-12 * c.designed_level);
   }
-  const Scenario parsed =
-      ParseScenario(DesignedScenarioYaml("flight", design.designed[0]), "designed.yaml");
-  FlightScenario replay = design.designed[0].flight;
-  replay.excitation = parsed.flight.excitation;
-  const Log a = SimulateFlight(vehicle, design.designed[0].flight, design.designed[0].seed);
-  const Log b = SimulateFlight(vehicle, replay, design.designed[0].seed);
-  ASSERT_EQ(a.values, b.values);
+  ExpectTheFileFliesTheDesign(vehicle, design);
 
   options.pulse_widths_s = {0.5, 1.0};  // no cycle fits
   EXPECT_THROW(DesignExcitation(vehicle, {flight}, criterion, options), ComputationError);
