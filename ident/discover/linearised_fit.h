@@ -16,7 +16,9 @@
 // cluster); one constant-input hold of a balance log. Each log is a stratum. Candidate effects enter as extra free
 // parameters at the values where they are absent, so r is the fit's own
 // residual and their columns are the candidate's output sensitivities along
-// the fitted trajectory (CVODES, the same costs as the fit).
+// the fitted trajectory (the same costs as the fit); a lag's column comes
+// from just beside absence, where it has a derivative, with r still taken
+// at absence (LineariseFit's residual_values).
 #pragma once
 
 #include <map>
