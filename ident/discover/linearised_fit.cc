@@ -105,8 +105,7 @@ LinearisedFit::LinearisedFit(int num_segments, std::vector<std::string> names,
       state_diagonal(num_segments, StateBlock::Zero()),
       state_next(num_segments, StateBlock::Zero()),
       state_parameter(Eigen::MatrixXd::Zero(num_state_columns, parameter_names.size())),
-      parameter_normal(Eigen::MatrixXd::Zero(parameter_names.size(), parameter_names.size())),
-      gradient(Eigen::VectorXd::Zero(num_state_columns + parameter_names.size())) {
+      parameter_normal(Eigen::MatrixXd::Zero(parameter_names.size(), parameter_names.size())) {
   CHECK_EQ(parameter_scales.size(), NumParameters());
 }
 
@@ -146,7 +145,7 @@ void LinearisedFit::AddNormal(const std::vector<int>& columns, const Eigen::Matr
 }
 
 void LinearisedFit::AddCluster(const std::vector<int>& columns, const Eigen::VectorXd& block_gradient,
-                               int residuals, int stratum) {
+                               int stratum) {
   CHECK_EQ(block_gradient.size(), static_cast<int>(columns.size()));
   Cluster c;
   c.parameters = Eigen::VectorXd::Zero(NumParameters());
@@ -162,14 +161,12 @@ void LinearisedFit::AddCluster(const std::vector<int>& columns, const Eigen::Vec
   CHECK_LE(c.states.size(), 2 * kNumStates) << "a cluster spans more than two segments";
   for (size_t a = 0; a < columns.size(); ++a) {
     const int j = columns[a];
-    gradient[j] += block_gradient[a];
     if (j < num_state_columns) {
       c.states[j - first] += block_gradient[a];
     } else {
       c.parameters[j - num_state_columns] += block_gradient[a];
     }
   }
-  c.residuals = residuals;
   c.stratum = stratum;
   clusters.push_back(std::move(c));
 }
@@ -298,10 +295,8 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
       return false;
     }
     f.AddNormal(job.columns, job.normal);
-    int begin = 0;
-    for (size_t k = 0; k < job.gradients.size(); ++k) {
-      f.AddCluster(job.columns, job.gradients[k], job.cluster_ends[k] - begin, job.stratum);
-      begin = job.cluster_ends[k];
+    for (const Eigen::VectorXd& gradient : job.gradients) {
+      f.AddCluster(job.columns, gradient, job.stratum);
     }
     f.rss += job.rss;
     f.num_residuals += job.cost->num_residuals();

@@ -50,7 +50,6 @@ struct LinearisedFit {
   std::vector<StateBlock> state_next;      // N_j,j+1 (zero for a log's last segment)
   Eigen::MatrixXd state_parameter;         // N_s,theta (state columns x parameters)
   Eigen::MatrixXd parameter_normal;        // N_theta,theta
-  Eigen::VectorXd gradient;                // b = J^T r, every column
   // b_c = J_c^T r_c of one cluster. It is zero outside its segment's states
   // (and the next segment's, for the cluster that holds the tie) and the
   // parameters.
@@ -58,7 +57,6 @@ struct LinearisedFit {
     int first_state_column = 0;
     Eigen::VectorXd states;      // b_c on the columns from first_state_column (empty: a balance hold)
     Eigen::VectorXd parameters;  // b_c on the parameter columns
-    int residuals = 0;
     int stratum = 0;             // index of its log
   };
   std::vector<Cluster> clusters;
@@ -76,9 +74,9 @@ struct LinearisedFit {
   // Adds a residual block's J^T J, given over `columns` (its local order;
   // the states of one segment or of two neighbours, and parameters).
   void AddNormal(const std::vector<int>& columns, const Eigen::MatrixXd& block);
-  // Adds a cluster: its J^T r over `columns`, as AddNormal; also to `gradient`.
+  // Adds a cluster: its J^T r over `columns`, as AddNormal.
   void AddCluster(const std::vector<int>& columns, const Eigen::VectorXd& block_gradient,
-                  int residuals, int stratum);
+                  int stratum);
 };
 
 // Linearises the problem of `vehicle`'s free parameters on `logs` at the

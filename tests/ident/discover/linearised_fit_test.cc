@@ -42,7 +42,7 @@ LinearisedFit Linearise(const Eigen::MatrixXd& J0, const Eigen::MatrixXd& Z,
   f.AddNormal(columns, J.transpose() * J);
   for (int first = 0; first < J.rows(); first += cluster) {
     const int rows = std::min<int>(cluster, J.rows() - first);
-    f.AddCluster(columns, J.middleRows(first, rows).transpose() * r.segment(first, rows), rows, 0);
+    f.AddCluster(columns, J.middleRows(first, rows).transpose() * r.segment(first, rows), 0);
   }
   f.rss = r.squaredNorm();
   f.num_residuals = static_cast<int>(r.size());
@@ -226,7 +226,7 @@ TEST(LinearisedFit, BlockEliminationEqualsTheDenseProjection) {
     for (int end : b.cluster_ends) {
       f.AddCluster(b.columns,
                    Jb.middleRows(begin, end - begin).transpose() * rb.segment(begin, end - begin),
-                   end - begin, b.stratum);
+                   b.stratum);
       cluster_scores.push_back(Ztb.middleRows(begin, end - begin).transpose() *
                                rb.segment(begin, end - begin));
       begin = end;
