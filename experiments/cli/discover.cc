@@ -147,6 +147,12 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
     o << "\n";
   }
   for (const RemovedEffect& e : r.removed) {
+    if (e.made_redundant_by.empty()) {
+      o << "\nRemoved " << e.effect << " again: without it, the rest refitted warm from its refit, "
+        << "it removes only " << ShareText(e.share_of_excess, e.share_of_excess_held_out)
+        << ": its refit's gain came from moving the declared parameters, not from it.\n";
+      continue;
+    }
     o << "\nRemoved " << e.effect << " (added earlier): in the model with " << e.made_redundant_by
       << " it removes only " << ShareText(e.share_of_excess, e.share_of_excess_held_out)
       << ": it was standing in for " << e.made_redundant_by << ".\n";

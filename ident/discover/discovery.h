@@ -111,13 +111,14 @@ struct BoundSymptom {
   std::string text;                   // for people
 };
 
-// An effect added in an earlier round that a later one made redundant: in
-// the model that holds both, it removes less than min_share_of_excess of its
-// channels' excess error (step 5 judged again), so it was taken out (and is
-// not a candidate again).
+// An added effect that, taken out of the model and the rest refitted warm,
+// removes less than min_share_of_excess of its channels' excess error (step 5
+// judged again): an earlier one that a later one made redundant, or the one
+// just added whose refit gained by moving the declared parameters into a
+// better basin. It was taken out (and is not a candidate again).
 struct RemovedEffect {
   std::string effect;
-  std::string made_redundant_by;  // the effect added in that round
+  std::string made_redundant_by;  // the effect added in that round; empty: itself
   int round = 0;
   double share_of_excess = 0;           // what it still removed, estimation data
   double share_of_excess_held_out = 0;  // NaN without held-out data
