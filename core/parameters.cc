@@ -119,4 +119,14 @@ void ParameterSet::SetScaledFreeVector(const Eigen::VectorXd& scaled) {
   }
 }
 
+std::vector<std::string> ParametersAtBounds(const ParameterSet& parameters) {
+  std::vector<std::string> out;
+  for (int i : parameters.FreeIndices()) {
+    const Parameter& p = parameters[i];
+    const double tolerance = 1e-6 * (p.upper - p.lower);
+    if (p.value <= p.lower + tolerance || p.value >= p.upper - tolerance) out.push_back(p.name);
+  }
+  return out;
+}
+
 }  // namespace coaxid

@@ -94,4 +94,7 @@ class ParameterSet {
   std::vector<Parameter> parameters_;
 };
 
+// Free parameters within 1e-6 of their range from a bound.
+std::vector<std::string> ParametersAtBounds(const ParameterSet& parameters);
+
 }  // namespace coaxid

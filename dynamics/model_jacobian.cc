@@ -19,7 +19,7 @@ bool DerivativeJacobians(const VehicleModel& model, const Eigen::VectorXd& theta
         model.AppliedInput(th, input, t, u);
         model.Derivative(th, xx, u, xdot);
       },
-      theta, x, kNumStates, kNumStates, parameter_indices, nullptr, dfdx, dfdp);
+      theta, x, model.NumStates(), model.NumStates(), parameter_indices, nullptr, dfdx, dfdp);
 }
 
 bool FlightOutputJacobians(const VehicleModel& model, const Eigen::VectorXd& theta,
@@ -30,7 +30,7 @@ bool FlightOutputJacobians(const VehicleModel& model, const Eigen::VectorXd& the
       [&](const auto* th, const auto* xx, auto* out) {
         FlightOutputsAt(model, th, xx, input, out);
       },
-      theta, x, kNumStates, kNumFlightChannels, parameter_indices, y, dydx, dydp);
+      theta, x, model.NumStates(), kNumFlightChannels, parameter_indices, y, dydx, dydp);
 }
 
 bool BalanceOutputJacobians(const VehicleModel& model, const Eigen::VectorXd& theta,

@@ -17,7 +17,7 @@ Simulator::Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
     IntegratorOptions augmented = options;
     augmented.newton = false;  // fixed-point iteration on the augmented system
     // Step sizes follow the state, as with CVODES and sensitivity_error_control off.
-    if (!options.sensitivity_error_control) augmented.error_controlled_states = kNumStates;
+    if (!options.sensitivity_error_control) augmented.error_controlled_states = ode_.NumStates();
     integrator_ = std::make_unique<Integrator>(*variational_, augmented);
   } else {
     integrator_ = std::make_unique<Integrator>(ode_, options, sensitivities);
@@ -28,7 +28,8 @@ Simulator::Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
 bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::VectorXd& x0,
                     Trajectory* out, const HeldInput* start) {
   CHECK(first >= 0 && first <= last && last < inputs.size());
-  CHECK_EQ(x0.size(), kNumStates);
+  const int n = ode_.NumStates();
+  CHECK_EQ(x0.size(), n);
   // Sized once and written in place: a trajectory reused for the next run
   // (output-error segments keep theirs) allocates nothing.
   const int samples = last - first + 1;
@@ -43,10 +44,8 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
   out->sensitivities.resize(with_sensitivities ? samples : 0);
   // The natural initial sensitivities: [I | 0] (initial-state columns come
   // first when carried, SensitivityOptions).
-  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(kNumStates, columns_);
-  if (sensitivity_options_.wrt_initial_state && columns_ >= kNumStates) {
-    S.leftCols(kNumStates).setIdentity();
-  }
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(n, columns_);
+  if (sensitivity_options_.wrt_initial_state && columns_ >= n) S.leftCols(n).setIdentity();
   if (with_sensitivities) out->sensitivities[0] = S;
 
   // A run is a function of its arguments alone (the same point simulated
@@ -60,12 +59,12 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
     // Restart at every input change: the right-hand side jumps there.
     bool ok;
     if (variational_) {
-      z.head(kNumStates) = x;
-      z.tail(z.size() - kNumStates) = Eigen::Map<const Eigen::VectorXd>(S.data(), S.size());
+      z.head(n) = x;
+      z.tail(z.size() - n) = Eigen::Map<const Eigen::VectorXd>(S.data(), S.size());
       ok = integrator_->Reset(inputs.time(k), z) && integrator_->AdvanceTo(inputs.time(k + 1), &z);
       if (ok) {
-        x = z.head(kNumStates);
-        S = Eigen::Map<const Eigen::MatrixXd>(z.data() + kNumStates, kNumStates, columns_);
+        x = z.head(n);
+        S = Eigen::Map<const Eigen::MatrixXd>(z.data() + n, n, columns_);
       }
     } else {
       ok = integrator_->Reset(inputs.time(k), x, with_sensitivities ? &S : nullptr) &&

@@ -1,6 +1,7 @@
 #include "dynamics/trim.h"
 
 #include <cmath>
+#include <vector>
 
 #include <Eigen/Dense>
 #include <ceres/jet.h>
@@ -18,15 +19,15 @@ using Jet = ceres::Jet<double, kUnknowns>;
 template <typename T>
 void Accelerations(const VehicleModel& model, const std::vector<T>& theta, const T* z,
                    double height, double heading, T* out) {
-  T x[kNumStates];
-  for (int i = 0; i < kNumStates; ++i) x[i] = T(0);
+  // Effect states (a stabilizer bar's tilt) rest at 0 at zero rates.
+  std::vector<T> state(model.NumStates(), T(0)), xdot(model.NumStates());
+  T* x = state.data();
   x[kZ] = T(-height);
   x[kPsi] = T(heading);
   x[kPhi] = z[4];
   x[kTheta] = z[5];
   const T input[kNumInputs] = {z[0], z[1], z[2], z[3]};
-  T xdot[kNumStates];
-  model.Derivative(theta.data(), x, input, xdot);
+  model.Derivative(theta.data(), x, input, xdot.data());
   for (int i = 0; i < 3; ++i) out[i] = xdot[kU + i];
   for (int i = 0; i < 3; ++i) out[3 + i] = xdot[kP + i];
 }
@@ -87,7 +88,7 @@ HoverTrim TrimHover(const VehicleModel& model, const Eigen::VectorXd& theta, dou
     throw ComputationError("hover trim did not converge: largest acceleration left " +
                            std::to_string(norm) + " (the vehicle may not be able to hover)");
   }
-  trim.state.setZero();
+  trim.state = Eigen::VectorXd::Zero(model.NumStates());
   trim.state[kZ] = -height;
   trim.state[kPsi] = heading;
   trim.state[kPhi] = z[4];

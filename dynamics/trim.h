@@ -15,7 +15,7 @@
 namespace coaxid {
 
 struct HoverTrim {
-  State state;          // the equilibrium state (zero velocity and rates)
+  Eigen::VectorXd state;  // the equilibrium state (zero velocity and rates; effect states 0)
   InputVector input;    // the trim inputs
   double residual = 0;  // max |acceleration| left at the solution
   int iterations = 0;

@@ -22,6 +22,12 @@ struct Vehicle {
   std::string ResolvedConfig() const { return ResolvedConfigYaml(config, parameters); }
 };
 
+// The estimators carry the 12 rigid-body states only, not yet an effect's
+// own states (stabilizer_bar): simulations fly such a vehicle, fits of it
+// are refused. Throws InputError naming the effect and `what` (the
+// estimator) when the vehicle has effect states.
+void RequireNoEffectStates(const Vehicle& vehicle, const std::string& what);
+
 // Builds the vehicle. Throws InputError on an unknown effect (listing the
 // library), an unknown effect parameter, or an override outside bounds.
 Vehicle MakeVehicle(const VehicleConfig& config);

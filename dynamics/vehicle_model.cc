@@ -12,9 +12,14 @@ VehicleModel::VehicleModel(InterferenceModel interference,
       << "a tabulated interference model needs a table";
   for (int offset : effect_offset_) any_effect_ = any_effect_ || offset >= 0;
   lag_index_.fill(-1);
+  state_offset_.fill(-1);
   ForEachEffectType([&](auto effect, int i) {
     using Effect = decltype(effect);
     if (effect_offset_[i] < 0) return;
+    if (Effect::kNumOwnStates > 0) {
+      state_offset_[i] = kNumStates + num_effect_states_;
+      num_effect_states_ += Effect::kNumOwnStates;
+    }
     if (Effect::kChangesFlightMeasurements) changes_measurements_ = true;
     for (int u = 0; u < kNumInputs; ++u) {
       if (Effect::kInputLag[u] < 0) continue;

@@ -33,12 +33,20 @@ class VehicleModel {
   // The paper's model: parametric sigma, no effect.
   VehicleModel() {
     effect_offset_.fill(-1);
+    state_offset_.fill(-1);
     lag_index_.fill(-1);
   }
   // effect_offset[i]: index in theta of library effect i's first parameter,
   // or -1 if the effect is off. A table model needs a table.
   VehicleModel(InterferenceModel interference, std::shared_ptr<const SigmaTable> table,
                const std::array<int, kNumEffects>& effect_offset);
+
+  // The state vector: the 12 rigid-body states (StateIndex), then the states
+  // of enabled effects that own some (stabilizer_bar), in library order.
+  int NumStates() const { return kNumStates + num_effect_states_; }
+  bool HasEffectStates() const { return num_effect_states_ > 0; }
+  // Index in the state vector of library effect i's first own state, or -1.
+  int EffectStateOffset(int library_index) const { return state_offset_[library_index]; }
 
   bool EffectEnabled(int library_index) const { return effect_offset_[library_index] >= 0; }
   int EffectOffset(int library_index) const { return effect_offset_[library_index]; }
@@ -76,13 +84,14 @@ class VehicleModel {
   bool HasTruthOnlyLoads() const { return truth_only_ != nullptr; }
 
   // Aerodynamic loads in body axes, gravity excluded (eqs. 6-33; in the
-  // balance setting eqs. 57-63 with model.md decision 5). x is the 12-state
-  // vector in flight and ignored (nullptr allowed) in the balance setting,
-  // where u = v = w = 0, no rotation and level attitude.
+  // balance setting eqs. 57-63 with model.md decision 5). x is the state
+  // vector (NumStates() entries) in flight and ignored (nullptr allowed) in
+  // the balance setting, where u = v = w = 0, no rotation and level attitude.
   template <typename T>
   AeroLoads<T> Loads(const T* theta, const T* input, Setting setting, const T* x) const;
 
-  // The 12-state derivative (eqs. 34-49).
+  // The state derivative: eqs. 34-49 for the 12 rigid-body states, then
+  // each enabled effect's own states.
   template <typename T>
   void Derivative(const T* theta, const T* x, const T* input, T* xdot) const;
 
@@ -121,6 +130,8 @@ class VehicleModel {
   InterferenceModel interference_ = InterferenceModel::kParametric;
   std::shared_ptr<const SigmaTable> table_;
   std::array<int, kNumEffects> effect_offset_;
+  std::array<int, kNumEffects> state_offset_;  // x index of each effect's own states, or -1
+  int num_effect_states_ = 0;
   std::array<int, kNumInputs> lag_index_;  // theta index of each input's lag, or -1
   bool any_effect_ = false;
   bool lags_inputs_ = false;
@@ -215,10 +226,16 @@ AeroLoads<T> VehicleModel::LoadsGivenRotation(const T* theta, const T* input, Se
   bool truth_only = false;
   if constexpr (std::is_same_v<T, double>) truth_only = truth_only_ != nullptr;
   if (any_effect_ || truth_only) {
-    const EffectContext<T> context{theta, setting, input[kOmega1], input[kOmega2], delta_cx,
-                                   delta_cy, sigma, T2_B, rotor_z, v_B, w_B, height};
-    ForEachEnabledEffect(theta, [&](auto effect, const T* p) {
-      decltype(effect)::AddLoads(context, p, &loads);
+    EffectContext<T> context{theta, setting, input[kOmega1], input[kOmega2], delta_cx,
+                             delta_cy, sigma, T2_B, rotor_z, v_B, w_B, height};
+    ForEachEffectType([&](auto effect, int i) {
+      using Effect = decltype(effect);
+      if (effect_offset_[i] < 0) return;
+      if constexpr (Effect::kNumOwnStates > 0) {
+        context.own_states = flight ? x + state_offset_[i] : nullptr;
+      }
+      Effect::AddLoads(context, theta + effect_offset_[i], &loads);
+      context.own_states = nullptr;
     });
     if constexpr (std::is_same_v<T, double>) {
       if (truth_only) truth_only_->Add(context, &loads);
@@ -236,6 +253,15 @@ void VehicleModel::Derivative(const T* theta, const T* x, const T* input, T* xdo
   const Vec3<T> F_B = loads.force_B + mg * Vec3<T>(R_EB(2, 0), R_EB(2, 1), R_EB(2, 2));
   RigidBodyDerivative(x, R_EB, F_B, loads.moment_B, theta[kMass], theta[kIxx], theta[kIyy],
                       theta[kIzz], xdot);
+  if (num_effect_states_ == 0) return;
+  ForEachEffectType([&](auto effect, int i) {
+    using Effect = decltype(effect);
+    if constexpr (Effect::kNumOwnStates > 0) {
+      if (effect_offset_[i] < 0) return;
+      Effect::OwnStateDerivative(theta + effect_offset_[i], x, x + state_offset_[i],
+                                 xdot + state_offset_[i]);
+    }
+  });
 }
 
 }  // namespace coaxid

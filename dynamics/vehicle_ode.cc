@@ -14,7 +14,7 @@ bool VehicleOde::Rhs(double t, const double* x, double* xdot) const {
   double u[kNumInputs];
   model_.AppliedInput(theta_.data(), input_, t, u);
   model_.Derivative(theta_.data(), x, u, xdot);
-  for (int i = 0; i < kNumStates; ++i) {
+  for (int i = 0; i < model_.NumStates(); ++i) {
     if (!std::isfinite(xdot[i])) return false;
   }
   return true;

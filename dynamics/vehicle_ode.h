@@ -1,5 +1,5 @@
-// The vehicle model as an OdeSystem for the integrator: the 12-state
-// derivative (eqs. 34-49) over one hold interval set by SetInput (the logged
+// The vehicle model as an OdeSystem for the integrator: the state
+// derivative (eqs. 34-49, and any effect's own states) over one hold interval set by SetInput (the logged
 // row held, model.md; a lagged actuator's exact exponential inside it,
 // dynamics/held_input.h), and its Jacobians by automatic differentiation.
 #pragma once
@@ -26,7 +26,7 @@ class VehicleOde : public OdeSystem {
   void SetTheta(const Eigen::VectorXd& theta) { theta_ = theta; }
   const Eigen::VectorXd& theta() const { return theta_; }
 
-  int NumStates() const override { return kNumStates; }
+  int NumStates() const override { return model_.NumStates(); }
   int NumSensitivityParameters() const override {
     return static_cast<int>(sensitivity_parameters_.size());
   }

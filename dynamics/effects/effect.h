@@ -15,6 +15,13 @@
 //                                            dynamics/outputs.h, true values in, logged
 //                                            values out); such an effect also sets
 //                                            kChangesFlightMeasurements = true
+// An effect that owns states (stabilizer_bar) sets kNumOwnStates > 0 and defines
+//   OwnStateDerivative(p, x, s, sdot)        its states' derivative, flight only (x: the
+//                                            whole state, s: its own states within it)
+// and reads its states in AddLoads through context.own_states (nullptr in the balance
+// setting, where they rest at zero). They follow the 12 rigid-body states in
+// the state vector, in library order (VehicleModel::NumStates()), start at 0
+// in simulations and are estimated like the others where estimators carry them.
 // and an actuator effect (servo_lag, motor_lag) sets kInputLag: for each input (omega1,
 // omega2, delta_cx, delta_cy) the index in p of the time constant of the
 // first-order lag through which the applied input follows the logged one, or
@@ -71,6 +78,9 @@ struct EffectContext {
   Vec3<T> v_B;                     // ground-relative velocity (u, v, w)
   Vec3<T> w_B;                     // body rates (p, q, r)
   T height;                        // h = -z [m] (flight only)
+  // The effect's own states (kNumOwnStates of them) in flight; nullptr in the
+  // balance setting and for effects without states.
+  const T* own_states = nullptr;
 };
 
 struct EffectBase {
@@ -80,6 +90,10 @@ struct EffectBase {
   static constexpr bool kChangesFlightMeasurements = false;
   // Actuator effects: per input, the index in p of its lag time constant, or -1.
   static constexpr std::array<int, 4> kInputLag = {-1, -1, -1, -1};
+  // States the effect owns (they join the state vector after the 12).
+  static constexpr int kNumOwnStates = 0;
+  template <typename T>
+  static void OwnStateDerivative(const T* /*p*/, const T* /*x*/, const T* /*s*/, T* /*sdot*/) {}
   template <typename T>
   static void AdjustInputs(const T* /*p*/, T* /*delta_cx*/, T* /*delta_cy*/) {}
   template <typename T>

@@ -18,6 +18,7 @@
 #include "dynamics/effects/rotor_damping.h"
 #include "dynamics/effects/rotor_drag.h"
 #include "dynamics/effects/servo_lag.h"
+#include "dynamics/effects/stabilizer_bar.h"
 #include "dynamics/effects/swashplate_bias.h"
 #include "dynamics/effects/wake_interference.h"
 #include "dynamics/effects/wind.h"
@@ -27,7 +28,8 @@ namespace coaxid {
 using EffectTypes =
     std::tuple<GyroscopicEffect, RotorDampingEffect, GroundEffect, RotorDragEffect,
                CgOffsetEffect, SwashplateBiasEffect, WindEffect, WakeInterferenceEffect,
-               GyroBiasEffect, AccelBiasEffect, ServoLagEffect, MotorLagEffect>;
+               GyroBiasEffect, AccelBiasEffect, ServoLagEffect, MotorLagEffect,
+               StabilizerBarEffect>;
 inline constexpr int kNumEffects = std::tuple_size_v<EffectTypes>;
 
 namespace internal {
@@ -47,6 +49,7 @@ struct EffectInfo {
   std::string name;
   std::string description;
   std::vector<EffectParameterSpec> parameters;
+  int num_own_states = 0;  // states it adds after the 12 (stabilizer_bar: 2)
 };
 
 // Name, description and parameters of every effect, in library order.

@@ -15,6 +15,7 @@
 #include "experiments/cli/estimation_io.h"
 #include "experiments/cli/flag_checks.h"
 #include "experiments/cli/flags.h"
+#include "experiments/cli/plausibility_report.h"
 #include "ident/baseline/balance_holds.h"
 #include "ident/discover/discovery.h"
 #include "ident/discover/practical_significance.h"
@@ -127,7 +128,8 @@ std::string FitTable(const DiscoveryResult& r, bool has_validation) {
 
 std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::string>& logs,
                            const std::string& validation, const std::vector<std::string>& plots,
-                           const std::string& plot_error, const DiscoveryOptions& options) {
+                           const std::string& plot_error, const DiscoveryOptions& options,
+                           const PlausibilityVerdict& plausibility) {
   const bool has_validation = !r.baseline.validation.empty();
   std::ostringstream o;
   o << "# coaxid discover: what the declared model lacks\n\n";
@@ -164,6 +166,13 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
   if (!r.unexplained.empty()) {
     o << "\nChannels whose residual is still structured and that no library effect explains:\n\n";
     for (const UnexplainedChannel& u : r.unexplained) o << "- **" << u.channel << "**: " << u.why << "\n";
+  }
+  o << "\n## Plausibility of the final model\n\n";
+  if (plausibility.DescribesVehicle()) {
+    o << "Plausible: " << plausibility.Summary().substr(std::string("plausible: ").size()) << ".\n";
+  } else {
+    o << "**The model does not describe this vehicle.**\n\n";
+    for (const PlausibilityFinding& f : plausibility.findings) o << "- " << f.text << "\n";
   }
   o << "\n## Error per channel, before (declared model) and after\n\n" << FitTable(r, has_validation);
   o << "\n## Candidates\n\nScore test linearised at the current fit (cluster-robust, "
@@ -309,6 +318,8 @@ int RunDiscover() {
   std::string plot_error;
   const std::vector<std::string> plots = renderer.Finish(&plot_error);
   nlohmann::json j = DiscoveryJson(r, options);
+  AddPlausibility(r.baseline.vehicle.parameters, &j["baseline"]);
+  const PlausibilityVerdict plausibility = AddPlausibility(r.final.vehicle.parameters, &j["final"]);
   nlohmann::json logs_json = nlohmann::json::array();
   for (const Log& log : logs) logs_json.push_back(log.source);
   j["logs"] = logs_json;
@@ -319,7 +330,8 @@ int RunDiscover() {
   std::vector<std::string> sources;
   for (const Log& log : logs) sources.push_back(log.source);
   WriteFileAtomically(dir + "/report.md",
-                      ReportMarkdown(r, sources, split.description, plots, plot_error, options));
+                      ReportMarkdown(r, sources, split.description, plots, plot_error, options,
+                                     plausibility));
 
   std::printf("discover: added %zu effect(s)", r.added.size());
   for (const std::string& e : r.added) std::printf(" %s", e.c_str());
@@ -327,6 +339,7 @@ int RunDiscover() {
   for (const UnexplainedChannel& u : r.unexplained) {
     std::printf("  unexplained %s: %s\n", u.channel.c_str(), u.why.c_str());
   }
+  PrintPlausibility(plausibility);
   std::fprintf(stderr, "discover: done in %.1f s -> %s/discovery.json, report.md\n", r.seconds,
                dir.c_str());
   return 0;

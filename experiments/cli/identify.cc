@@ -23,6 +23,7 @@
 #include "experiments/cli/identify_ekf.h"
 #include "experiments/cli/identify_kinematic.h"
 #include "experiments/cli/identify_output_error.h"
+#include "experiments/cli/plausibility_report.h"
 #include "ident/baseline/linear_baseline.h"
 #include "ident/baseline/plots.h"
 #include "ident/baseline/report.h"
@@ -268,9 +269,11 @@ nlohmann::json IdentifyLinearKf(const IdentifyRun& run) {
     context.outputs["plots_skipped"] = plot_error;
     context.notes.push_back("plots skipped: " + plot_error);
   }
-  const nlohmann::json report = LinearBaselineReportJson(result, vehicle.parameters, context);
+  nlohmann::json report = LinearBaselineReportJson(result, vehicle.parameters, context);
+  const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, &report);
   WriteJson(dir + "/report.json", report);
   if (run.print_estimates) PrintEstimates(result);
+  PrintPlausibility(plausibility);
   std::fprintf(stderr, "identify: done in %.2f s -> %s/report.json%s\n", SecondsSince(start),
                dir.c_str(), plot_error.empty() ? "" : " (plots skipped)");
   return report;

@@ -22,6 +22,7 @@
 #include "experiments/cli/flag_checks.h"
 #include "experiments/cli/flags.h"
 #include "experiments/cli/prior_flag.h"
+#include "experiments/cli/plausibility_report.h"
 #include "ident/ekf/ekf.h"
 #include "ident/ekf/history_files.h"
 #include "ident/ekf/report.h"
@@ -344,9 +345,11 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
     context.notes.push_back("plots skipped: " + plot_error);
   }
   context.notes.push_back("Validation data: " + context.validation_description + ".");
-  const nlohmann::json report = EkfReportJson(result, options, initial, context);
+  nlohmann::json report = EkfReportJson(result, options, initial, context);
+  const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, &report);
   WriteJson(dir + "/report.json", report);
   if (run.print_estimates) PrintEstimates(result);
+  PrintPlausibility(plausibility);
   std::fprintf(stderr, "identify: ekf: done in %.2f s -> %s/report.json%s\n", SecondsSince(start),
                dir.c_str(), plot_error.empty() ? "" : " (plots skipped)");
   return report;

@@ -19,6 +19,7 @@
 #include "experiments/cli/flag_checks.h"
 #include "experiments/cli/flags.h"
 #include "experiments/cli/prior_flag.h"
+#include "experiments/cli/plausibility_report.h"
 #include "ident/baseline/balance_holds.h"
 #include "ident/baseline/linear_baseline.h"
 #include "ident/ekf/ekf_start.h"
@@ -266,9 +267,11 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
       {"outputs", {{"files", files}, {"plots", plots}}}};
   if (!plot_error.empty()) report["outputs"]["plots_skipped"] = plot_error;
   report["validation"]["description"] = split.description;
+  const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, &report);
   WriteJson(dir + "/report.json", report);
 
   if (run.print_estimates) PrintEstimates(result);
+  PrintPlausibility(plausibility);
   std::fprintf(stderr, "identify: done in %.1f s -> %s/report.json\n", SecondsSince(start),
                dir.c_str());
   return report;

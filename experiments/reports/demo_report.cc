@@ -79,6 +79,14 @@ void EstimatesTable(std::ostringstream& o, const json& comparison, const std::st
   }
 }
 
+// The plausibility verdict of a report (core/plausibility.h), one paragraph.
+void PlausibilityLine(std::ostringstream& o, const json& plausibility) {
+  if (!plausibility.is_object()) return;
+  o << "\nPlausibility: " << (plausibility.value("describes_vehicle", true) ? "" : "**")
+    << plausibility.value("verdict", "") << (plausibility.value("describes_vehicle", true) ? "" : "**")
+    << "\n";
+}
+
 void MethodSection(std::ostringstream& o, const DemoRecord& r, const std::string& method,
                    const std::string& heading, const std::string& what,
                    const std::vector<std::string>& plot_keys) {
@@ -98,8 +106,9 @@ void MethodSection(std::ostringstream& o, const DemoRecord& r, const std::string
     << "/report.json`. Overall nrmse: fit "
     << NumberText(JsonNumber((*m)["fit"], "overall_nrmse"), "%.3f") << ", validation "
     << NumberText(JsonNumber((*m)["validation"], "overall_nrmse"), "%.3f") << ".\n";
-  EstimatesTable(o, r.comparison, method);
   const auto report = r.reports.find(method);
+  if (report != r.reports.end()) PlausibilityLine(o, report->second.value("plausibility", json()));
+  EstimatesTable(o, r.comparison, method);
   if (report != r.reports.end()) Images(o, method, KeyPlots(report->second, folder, plot_keys, 3));
 }
 
@@ -117,6 +126,7 @@ void DiscoverySection(std::ostringstream& o, const DemoDiscovery& d) {
       o << " ± " << NumberText(p["std"].get<double>(), "%.2g");
   }
   o << ". Full report: `" << d.folder << "/report.md`.\n";
+  PlausibilityLine(o, j["final"].value("plausibility", json()));
   for (const json& u : j.value("unexplained", json::array())) {
     o << "\nStill unexplained: **" << u.value("channel", "") << "**: " << u.value("why", "")
       << "\n";

@@ -166,8 +166,6 @@ std::vector<std::string> ChannelsReachedBy(const Vehicle& vehicle,
                                            const std::vector<EstimationLog>& logs,
                                            const NoiseWeights& noise);
 
-// Free parameters of `parameters` within 1e-6 of their range from a bound.
-std::vector<std::string> ParametersAtBounds(const ParameterSet& parameters);
 
 // A fit of `vehicle` from its current values at the final segment length
 // (a refit near a solution), or, coarse_to_fine, through the fit's whole

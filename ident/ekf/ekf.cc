@@ -128,6 +128,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   const Clock::time_point start = Clock::now();
   std::string why;
   if (!options.IsValid(&why)) throw InputError("EKF options: " + why);
+  RequireNoEffectStates(vehicle, "the EKF");
   if (logs.empty()) throw InputError("EKF: no log to estimate from");
   long rows_per_pass = 0;
   for (const EstimationLog& log : logs) {

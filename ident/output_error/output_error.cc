@@ -371,6 +371,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   std::string why;
   if (!options.IsValid(&why)) throw InputError("output-error options: " + why);
   if (logs.empty()) throw InputError("output-error needs at least one log");
+  RequireNoEffectStates(declared, "output_error");
   for (const ParameterPrior& prior : options.priors) {
     if (!declared.parameters.Has(prior.name) || !(prior.std > 0) || !std::isfinite(prior.value)) {
       throw InputError("output-error prior on '" + prior.name +
@@ -630,6 +631,7 @@ PredictedPrecision PredictOutputErrorPrecision(
     const OutputErrorOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("output-error options: " + why);
+  RequireNoEffectStates(declared, "the predicted precision (design)");
   if (logs.empty() || true_states.size() != logs.size()) {
     throw InputError("the predicted precision needs logs and a true state list per log");
   }

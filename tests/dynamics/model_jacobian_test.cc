@@ -51,6 +51,8 @@ Vehicle Reference() { return LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/conf
 Vehicle AllEffects() {
   Vehicle v = Reference();
   for (const auto& info : EffectLibrary()) {
+    // The 12-state cases below; an effect's own states: stabilizer_bar_test.cc.
+    if (info.num_own_states > 0) continue;
     std::map<std::string, ParameterOverride> overrides;
     for (const auto& spec : info.parameters) overrides[spec.name].value = spec.typical;
     v = WithEffect(v, info.name, overrides);
@@ -168,7 +170,9 @@ TEST(ModelJacobianTest, NoEffectMatchesCentralDifferences) {
 
 TEST(ModelJacobianTest, AllEffectsMatchCentralDifferences) {
   const Vehicle v = AllEffects();
-  ASSERT_EQ(v.EffectNames().size(), EffectLibrary().size());
+  size_t stateless = 0;
+  for (const auto& info : EffectLibrary()) stateless += info.num_own_states == 0;
+  ASSERT_EQ(v.EffectNames().size(), stateless);
   CheckVehicle(v, 2002u, "all effects");
 }
 

@@ -17,7 +17,7 @@ namespace coaxid {
 namespace {
 
 // A logged closed-loop flight with every effect on, so the replay exercises
-// the whole model; its inputs are replayed open loop for 1 s (the open-loop
+// the whole model (stabilizer_bar's two states included: 14 states); its inputs are replayed open loop for 1 s (the open-loop
 // hover diverges slowly enough over 1 s to stay near hover).
 struct Fixture {
   Vehicle vehicle;
@@ -42,6 +42,10 @@ Fixture MakeFixture() {
   f.x0 = TrimHover(f.vehicle.model, f.vehicle.parameters.Values(), 1.5).state;
   f.x0[kU] = 0.1;  // some motion so every term of the model is active
   f.x0[kQ] = 0.05;
+  // The stabilizer bar's tilt (its two states follow the 12), off the shaft.
+  const int bar = f.vehicle.model.EffectStateOffset(EffectIndex("stabilizer_bar"));
+  f.x0[bar] = 0.01;
+  f.x0[bar + 1] = -0.02;
   return f;
 }
 
@@ -52,14 +56,15 @@ Fixture MakeFixture() {
 class LagAsStates : public OdeSystem {
  public:
   explicit LagAsStates(const Vehicle& v)
-      : v_(v), theta_(v.parameters.Values()), lag_(v.model.InputLags(theta_.data())) {}
+      : v_(v), n_(v.model.NumStates()), theta_(v.parameters.Values()),
+        lag_(v.model.InputLags(theta_.data())) {}
   void SetLogged(const InputVector& u) { logged_ = u; }
-  int NumStates() const override { return kNumStates + kNumInputs; }
+  int NumStates() const override { return n_ + kNumInputs; }
   int NumSensitivityParameters() const override { return 0; }
   bool Rhs(double /*t*/, const double* z, double* zdot) const override {
-    v_.model.Derivative(theta_.data(), z, z + kNumStates, zdot);
+    v_.model.Derivative(theta_.data(), z, z + n_, zdot);
     for (int i = 0; i < kNumInputs; ++i) {
-      zdot[kNumStates + i] = lag_[i] > 0 ? (logged_[i] - z[kNumStates + i]) / lag_[i] : 0.0;
+      zdot[n_ + i] = lag_[i] > 0 ? (logged_[i] - z[n_ + i]) / lag_[i] : 0.0;
     }
     return true;
   }
@@ -69,12 +74,13 @@ class LagAsStates : public OdeSystem {
   // An unlagged input is the logged one.
   void Unlagged(Eigen::VectorXd* z) const {
     for (int i = 0; i < kNumInputs; ++i) {
-      if (!(lag_[i] > 0)) (*z)[kNumStates + i] = logged_[i];
+      if (!(lag_[i] > 0)) (*z)[n_ + i] = logged_[i];
     }
   }
 
  private:
   const Vehicle& v_;
+  int n_;  // the vehicle's states, effect states included
   Eigen::VectorXd theta_;
   InputVector lag_;
   InputVector logged_{};
@@ -93,11 +99,13 @@ TEST(Simulator, AgreesWithIndependentRk4) {
   // Every library effect is on, the actuator lags among them: the applied
   // inputs start at the first row's logged ones and lag through rows 0-99.
   ASSERT_TRUE(f.vehicle.model.LagsInputs());
+  const int n = f.vehicle.model.NumStates();
+  ASSERT_EQ(n, kNumStates + 2);  // the stabilizer bar's tilt
   LagAsStates ode(f.vehicle);
   const InputVector lag = f.vehicle.model.InputLags(f.vehicle.parameters.Values().data());
-  Eigen::VectorXd z(kNumStates + kNumInputs);
-  z.head(kNumStates) = f.x0;
-  for (int i = 0; i < kNumInputs; ++i) z[kNumStates + i] = f.inputs.input(0)[i];
+  Eigen::VectorXd z(n + kNumInputs);
+  z.head(n) = f.x0;
+  for (int i = 0; i < kNumInputs; ++i) z[n + i] = f.inputs.input(0)[i];
   for (int k = 0; k < last; ++k) {
     ode.SetLogged(f.inputs.input(k));
     ode.Unlagged(&z);
@@ -106,20 +114,21 @@ TEST(Simulator, AgreesWithIndependentRk4) {
     const Eigen::VectorXd before = z;
     ASSERT_TRUE(IntegrateRk4(ode, f.inputs.time(k), f.inputs.time(k + 1), 50, &z));
     if (k < 100) {  // before the replay starts only the lags run
-      z.head(kNumStates) = before.head(kNumStates);
+      z.head(n) = before.head(n);
       continue;
     }
     const Eigen::VectorXd& cvode = trajectory.states[k + 1 - 100];
-    for (int i = 0; i < kNumStates; ++i) {
+    for (int i = 0; i < n; ++i) {
       // Both integrators are accurate to ~1e-9 here; 1e-7 leaves margin for
       // the error growth of the unstable hover over 2 s.
       ASSERT_NEAR(cvode[i], z[i], 1e-7 * (1 + std::fabs(z[i])))
-          << "state " << StateName(i) << " at t = " << f.inputs.time(k + 1);
+          << "state " << (i < kNumStates ? StateName(i) : "bar") << " at t = "
+          << f.inputs.time(k + 1);
     }
     // The applied inputs the simulator carried to the next row (rotor
     // speeds ~300 rad/s: relative).
     for (int i = 0; i < kNumInputs; ++i) {
-      const double expected = lag[i] > 0 ? z[kNumStates + i] : f.inputs.input(k + 1)[i];
+      const double expected = lag[i] > 0 ? z[n + i] : f.inputs.input(k + 1)[i];
       ASSERT_NEAR(trajectory.inputs[k + 1 - 100].start[i], expected,
                   1e-12 * (1 + std::fabs(expected)))
           << "applied input " << i << " at t = " << f.inputs.time(k + 1);
@@ -146,7 +155,8 @@ TEST_P(SimulatorSensitivities, EqualFiniteDifferencesOfWholeSimulations) {
   Trajectory trajectory;
   ASSERT_TRUE(simulator.Run(f.inputs, first, last, f.x0, &trajectory)) << simulator.last_error();
   const Eigen::MatrixXd& S = trajectory.sensitivities.back();
-  ASSERT_EQ(S.cols(), kNumStates + static_cast<int>(params.size()));
+  const int n = f.vehicle.model.NumStates();  // the bar's two states included
+  ASSERT_EQ(S.cols(), n + static_cast<int>(params.size()));
 
   Simulator plain(f.vehicle.model, theta, options);
   auto final_state = [&](const Eigen::VectorXd& th, const Eigen::VectorXd& x0) {
@@ -158,12 +168,12 @@ TEST_P(SimulatorSensitivities, EqualFiniteDifferencesOfWholeSimulations) {
   const int columns = S.cols();
   for (int c = 0; c < columns; ++c) {
     Eigen::VectorXd th = theta, x0 = f.x0;
-    double* target = c < kNumStates ? &x0[c] : &th[params[c - kNumStates]];
+    double* target = c < n ? &x0[c] : &th[params[c - n]];
     // Central differences with a step of 1e-5 of the coordinate's scale (the
     // parameter's own scale, 1 for states): truncation error ~1e-10 relative,
     // round-off ~ tol/step ~ 1e-7 relative.
     const double h =
-        1e-5 * (c < kNumStates ? 1.0 : f.vehicle.parameters[params[c - kNumStates]].scale);
+        1e-5 * (c < n ? 1.0 : f.vehicle.parameters[params[c - n]].scale);
     const double saved = *target;
     *target = saved + h;
     const Eigen::VectorXd plus = final_state(th, x0);
@@ -178,14 +188,14 @@ TEST_P(SimulatorSensitivities, EqualFiniteDifferencesOfWholeSimulations) {
       // each), so the difference quotient is round-off, ~eps |x| / h.
       const double x_size = std::max(plus.cwiseAbs().maxCoeff(), 1.0);
       EXPECT_LT(fd.norm(), 1e3 * std::numeric_limits<double>::epsilon() * x_size / h)
-          << "column " << c << " " << f.vehicle.parameters[params[c - kNumStates]].name
+          << "column " << c << " " << f.vehicle.parameters[params[c - n]].name
           << ": CVODES says the state does not depend on it\nFD:   " << fd.transpose();
       continue;
     }
     EXPECT_LT((fd - S.col(c)).norm(), 1e-4 * scale)
         << "column " << c
-        << (c < kNumStates ? std::string(" x0.") + StateName(c)
-                           : " " + f.vehicle.parameters[params[c - kNumStates]].name)
+        << (c < n ? std::string(" x0.") + (c < kNumStates ? StateName(c) : "bar")
+                  : " " + f.vehicle.parameters[params[c - n]].name)
         << "\nFD:   " << fd.transpose() << "\nCVODES: " << S.col(c).transpose();
   }
 }

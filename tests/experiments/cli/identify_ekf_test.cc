@@ -93,6 +93,8 @@ TEST_F(EkfCliTest, WritesTheReportAndHistories) {
   EXPECT_TRUE(report["ekf"]["nis"]["all"]["band_95"].is_array());
   EXPECT_TRUE(report["ekf"]["nis"]["channels"].contains("q"));
   EXPECT_EQ(report["ekf"]["passes"], 2);
+  // A flight of the config's own vehicle: the fit is plausible (issue 17).
+  EXPECT_EQ(report["plausibility"]["describes_vehicle"], true) << report["plausibility"].dump();
 
   // Histories: one row per log row (80 % of 2401 rows estimated).
   for (const char* file : {"states.csv", "parameters.csv", "innovations.csv", "config.yaml",

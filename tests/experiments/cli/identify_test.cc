@@ -201,6 +201,13 @@ TEST_F(IdentifyCliTest, OutputErrorReportsTheColouredResidualCorrection) {
     ++checked;
   }
   EXPECT_GE(checked, 9);  // the balance log fixes the rotor constants and d
+  // The flight is of the config's vehicle, the balance log of another
+  // (testing_util::TruthVehicle): one model cannot describe both, and the
+  // fit says so (issue 17; it drives Cz to its bound, 16 std from either).
+  EXPECT_EQ(report["plausibility"]["describes_vehicle"], false) << report["plausibility"].dump();
+  EXPECT_FALSE(report["plausibility"]["findings"].empty());
+  EXPECT_TRUE(Contains(r.output, "plausibility: THE MODEL DOES NOT DESCRIBE THIS VEHICLE"))
+      << r.output;
 }
 
 TEST_F(IdentifyCliTest, CheckSaysFlightLogsAreNotForLinearKf) {

@@ -250,6 +250,7 @@ TEST(EkfTest, ScaleDirectionFollowsTheModel) {
   // group with v = theta (they scale with the moments), force-type ones do not.
   Vehicle all = base;
   for (const auto& info : EffectLibrary()) {
+    if (info.num_own_states > 0) continue;  // the EKF does not carry effect states yet
     std::map<std::string, ParameterOverride> overrides;
     for (const auto& spec : info.parameters) overrides[spec.name].value = spec.typical;
     all = WithEffect(all, info.name, overrides);
