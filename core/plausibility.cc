@@ -193,18 +193,24 @@ std::string PlausibilityVerdict::Summary() const {
              "(try `coaxid discover`), or the logs do not excite what it needs.";
 }
 
-std::map<std::string, double> EstimatesOfReport(const nlohmann::json& parameters) {
+std::map<std::string, double> EstimatesOfReport(const nlohmann::json& parameters,
+                                                const ParameterSet& declared) {
   std::map<std::string, double> out;
   if (!parameters.is_object()) return out;
   for (auto it = parameters.begin(); it != parameters.end(); ++it) {
     const nlohmann::json& p = it.value();
-    // A null std: the fit says the logs do not determine it (its value is
-    // arbitrary, and the report says so); not an estimate to judge.
-    const bool undetermined = p.is_object() && p.contains("std") && p["std"].is_null();
-    if (p.is_object() && p.value("estimated", false) && !undetermined && p.contains("value") &&
-        p["value"].is_number()) {
-      out[it.key()] = p["value"].get<double>();
+    if (!p.is_object() || !p.value("estimated", false) || !p.contains("value") ||
+        !p["value"].is_number()) {
+      continue;
     }
+    const double value = p["value"].get<double>();
+    if (p.contains("std") && p["std"].is_null()) {
+      if (!declared.Has(it.key())) continue;
+      const Parameter& d = declared.Get(it.key());
+      const double tolerance = 1e-6 * (d.upper - d.lower);  // as ParametersAtBounds
+      if (value > d.lower + tolerance && value < d.upper - tolerance) continue;
+    }
+    out[it.key()] = value;
   }
   return out;
 }

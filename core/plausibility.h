@@ -75,8 +75,11 @@ PlausibilityVerdict JudgePlausibility(const ParameterSet& declared,
                                       const std::map<std::string, double>& noise_std = {});
 
 // The estimated parameters of a report.json "parameters" object (entries
-// with "estimated": true and a numeric value), without those the fit found
-// undetermined (std null).
-std::map<std::string, double> EstimatesOfReport(const nlohmann::json& parameters);
+// with "estimated": true and a numeric value). Those the fit found
+// undetermined (std null) only where they sit at or beyond a bound of
+// `declared` (the fit pushed them there: inertias at 0.1 kg m^2 with the
+// scale held); elsewhere their value is arbitrary and the report says so.
+std::map<std::string, double> EstimatesOfReport(const nlohmann::json& parameters,
+                                                const ParameterSet& declared);
 
 }  // namespace coaxid

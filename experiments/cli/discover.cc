@@ -16,6 +16,7 @@
 #include "experiments/cli/flag_checks.h"
 #include "experiments/cli/flags.h"
 #include "experiments/cli/plausibility_report.h"
+#include "ident/noise_weights.h"
 #include "ident/baseline/balance_holds.h"
 #include "ident/discover/discovery.h"
 #include "ident/discover/practical_significance.h"
@@ -318,8 +319,10 @@ int RunDiscover() {
   std::string plot_error;
   const std::vector<std::string> plots = renderer.Finish(&plot_error);
   nlohmann::json j = DiscoveryJson(r, options);
-  AddPlausibility(r.baseline.vehicle.parameters, &j["baseline"]);
-  const PlausibilityVerdict plausibility = AddPlausibility(r.final.vehicle.parameters, &j["final"]);
+  const std::map<std::string, double> sensor_noise = NoiseFromData(split.estimation).std;
+  AddPlausibility(r.baseline.vehicle.parameters, sensor_noise, &j["baseline"]);
+  const PlausibilityVerdict plausibility =
+      AddPlausibility(r.final.vehicle.parameters, sensor_noise, &j["final"]);
   nlohmann::json logs_json = nlohmann::json::array();
   for (const Log& log : logs) logs_json.push_back(log.source);
   j["logs"] = logs_json;

@@ -270,7 +270,7 @@ nlohmann::json IdentifyLinearKf(const IdentifyRun& run) {
     context.notes.push_back("plots skipped: " + plot_error);
   }
   nlohmann::json report = LinearBaselineReportJson(result, vehicle.parameters, context);
-  const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, &report);
+  const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, {}, &report);
   WriteJson(dir + "/report.json", report);
   if (run.print_estimates) PrintEstimates(result);
   PrintPlausibility(plausibility);

@@ -346,7 +346,7 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   }
   context.notes.push_back("Validation data: " + context.validation_description + ".");
   nlohmann::json report = EkfReportJson(result, options, initial, context);
-  const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, &report);
+  const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, NoiseFromData(estimation).std, &report);
   WriteJson(dir + "/report.json", report);
   if (run.print_estimates) PrintEstimates(result);
   PrintPlausibility(plausibility);

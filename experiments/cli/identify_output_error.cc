@@ -20,6 +20,7 @@
 #include "experiments/cli/flags.h"
 #include "experiments/cli/prior_flag.h"
 #include "experiments/cli/plausibility_report.h"
+#include "ident/noise_weights.h"
 #include "ident/baseline/balance_holds.h"
 #include "ident/baseline/linear_baseline.h"
 #include "ident/ekf/ekf_start.h"
@@ -183,7 +184,27 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
   std::fprintf(stderr,
                "identify: output_error on %zu log(s), %zu parameter(s) estimated in the config\n",
                split.estimation.size(), vehicle.parameters.FreeIndices().size());
-  const OutputErrorResult result = FitOutputError(vehicle, split.estimation, options);
+  OutputErrorResult result = FitOutputError(vehicle, split.estimation, options);
+  if (!result.usable && result.scale_move_failed) {
+    // The data want a scale member beyond its bounds (with d held, inertias
+    // 300x the vehicle's): the model does not describe this vehicle. Fit
+    // again with the held member held in the solve too, so that member meets
+    // its bound, and report that fit with its plausibility verdict rather
+    // than nothing (issue 17).
+    std::fprintf(stderr, "identify: %s; fitting again with d held in the solve (the member meets "
+                 "its bound: a symptom, see the plausibility verdict)\n",
+                 result.why_not_usable.c_str());
+    notes.push_back("The first fit needed a scale member beyond its bounds (" +
+                    result.why_not_usable + "); this is the fit with d held in the solve, where "
+                    "that member meets its bound: the model does not describe this vehicle.");
+    // The first fit's converged noise weights, kept: its relaxation solves
+    // are not repeated (bounded effort: 44 s of a CoaX flight at 150 Hz,
+    // 32.6 s with them, see the README).
+    options.scale_free_in_solve = false;
+    options.noise = result.noise;
+    options.noise_relaxations = 0;
+    result = FitOutputError(vehicle, split.estimation, options);
+  }
   if (!result.usable) throw ComputationError(result.why_not_usable);
   std::fprintf(stderr, "identify: validating on held-out data ...\n");
   const std::vector<Eigen::MatrixXd> validation_predictions =
@@ -257,7 +278,13 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
       {"coloured_residuals", result.coloured_residuals.ToJson(result.identifiability.names)},
       {"noise_std", noise},
       {"convergence",
-       {{"iterations", result.iterations},
+       {{"stop_reason", result.hit_iteration_limit
+                            ? "iteration limit: the last solve stopped at its " +
+                                  std::to_string(options.max_iterations) +
+                                  " iterations before converging (" + result.termination + ")"
+                            : "converged: " + result.termination},
+        {"hit_iteration_limit", result.hit_iteration_limit},
+        {"iterations", result.iterations},
         {"initial_cost", result.initial_cost},
         {"final_cost", result.final_cost},
         {"termination", result.termination},
@@ -267,7 +294,7 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
       {"outputs", {{"files", files}, {"plots", plots}}}};
   if (!plot_error.empty()) report["outputs"]["plots_skipped"] = plot_error;
   report["validation"]["description"] = split.description;
-  const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, &report);
+  const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, NoiseFromData(split.estimation).std, &report);
   WriteJson(dir + "/report.json", report);
 
   if (run.print_estimates) PrintEstimates(result);

@@ -6,26 +6,18 @@
 
 namespace coaxid {
 
-PlausibilityVerdict PlausibilityOfReport(const ParameterSet& declared,
-                                         const nlohmann::json& report) {
-  // output_error and discover: "noise_std"; ekf: its measurement noise.
-  std::map<std::string, double> noise;
-  nlohmann::json noise_json = report.value("noise_std", nlohmann::json::object());
-  if (noise_json.empty() && report.contains("ekf")) {
-    noise_json = report["ekf"].value("measurement_noise", nlohmann::json::object())
-                     .value("std", nlohmann::json::object());
-  }
-  for (auto it = noise_json.begin(); it != noise_json.end(); ++it) {
-    if (it.value().is_number()) noise[it.key()] = it.value().get<double>();
-  }
-  return JudgePlausibility(declared,
-                           EstimatesOfReport(report.value("parameters", nlohmann::json::object())),
-                           report.value("fit", nlohmann::json()),
-                           report.value("validation", nlohmann::json()), noise);
+PlausibilityVerdict PlausibilityOfReport(const ParameterSet& declared, const nlohmann::json& report,
+                                         const std::map<std::string, double>& sensor_noise_std) {
+  return JudgePlausibility(
+      declared, EstimatesOfReport(report.value("parameters", nlohmann::json::object()), declared),
+      report.value("fit", nlohmann::json()), report.value("validation", nlohmann::json()),
+      sensor_noise_std);
 }
 
-PlausibilityVerdict AddPlausibility(const ParameterSet& declared, nlohmann::json* report) {
-  PlausibilityVerdict verdict = PlausibilityOfReport(declared, *report);
+PlausibilityVerdict AddPlausibility(const ParameterSet& declared,
+                                    const std::map<std::string, double>& sensor_noise_std,
+                                    nlohmann::json* report) {
+  PlausibilityVerdict verdict = PlausibilityOfReport(declared, *report, sensor_noise_std);
   (*report)["plausibility"] = verdict.ToJson();
   return verdict;
 }

@@ -547,6 +547,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     have_previous = true;
   }
 
+  result.noise = noise;  // the final weights, also for a caller's retry after a failed move
   const int held = solve_free.size() > free.size() ? HeldPosition(free, solve_free) : -1;
   Eigen::VectorXd move;
   if (held >= 0 && !MoveOntoTheGauge(result.gauge, vehicle.parameters, solve_free, theta_scaled,
@@ -591,7 +592,6 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   free.WriteBack(theta_scaled.data(), &result.parameters);
   result.ratios = ScaleFreeRatios(result.gauge, result.parameters, free.indices(),
                                   result.identifiability.covariance);
-  result.noise = noise;
   result.segments = previous.segments;
   result.predictions = previous_predictions;
   result.usable = true;

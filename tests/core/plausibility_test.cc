@@ -108,14 +108,21 @@ TEST(Plausibility, AChannelHoldingOnlyNoiseIsNotUnexplained) {
                    .DescribesVehicle());
   // Without the noise std, nrmse alone decides.
   EXPECT_FALSE(JudgePlausibility(p, AtConfig(p), Fit(11.0, 0.05), nullptr).DescribesVehicle());
-  // A parameter the report calls undetermined (std null) is not judged.
-  const nlohmann::json parameters = {{"Izz", {{"value", 0.0135}, {"std", nullptr}, {"estimated", true}}},
-                                     {"Ixx", {{"value", 0.0019}, {"std", 5e-5}, {"estimated", true}}},
-                                     {"d", {{"value", 0.1}, {"std", nullptr}, {"estimated", false}}}};
-  const std::map<std::string, double> from_report = EstimatesOfReport(parameters);
+  // A parameter the report calls undetermined (std null) is not judged
+  // (Izz drifting in a short flight without yaw), unless the fit pushed it
+  // to a bound (Iyy at 0.1 kg m^2 with the scale held).
+  nlohmann::json parameters = {{"Izz", {{"value", 0.0135}, {"std", nullptr}, {"estimated", true}}},
+                               {"Ixx", {{"value", 0.0019}, {"std", 5e-5}, {"estimated", true}}},
+                               {"d", {{"value", 0.1}, {"std", nullptr}, {"estimated", false}}}};
+  std::map<std::string, double> from_report = EstimatesOfReport(parameters, p);
   EXPECT_EQ(from_report.size(), 1u);
   EXPECT_EQ(from_report.count("Ixx"), 1u);
   EXPECT_TRUE(JudgePlausibility(p, from_report, nullptr, nullptr).DescribesVehicle());
+  parameters["Iyy"] = {{"value", 0.1}, {"std", nullptr}, {"estimated", true}};
+  from_report = EstimatesOfReport(parameters, p);
+  EXPECT_EQ(from_report.count("Iyy"), 1u);
+  const PlausibilityVerdict v = JudgePlausibility(p, from_report, nullptr, nullptr);
+  EXPECT_EQ(Subjects(v, Kind::kAtBound), std::vector<std::string>{"Iyy"});
   // Parameters the fit did not estimate are the user's: not judged.
   std::map<std::string, double> e = AtConfig(p);
   e.erase("d");
