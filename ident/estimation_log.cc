@@ -1,5 +1,6 @@
 #include "ident/estimation_log.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -69,6 +70,19 @@ int HoldoutStart(int num_rows, double fraction, const std::string& source) {
                      " of it for validation");
   }
   return start;
+}
+
+EstimationLog FirstSecondsOf(const EstimationLog& log, double seconds) {
+  const std::vector<double>& t = log.inputs.times();
+  const int rows = static_cast<int>(
+      std::upper_bound(t.begin(), t.end(), t.front() + seconds) - t.begin());
+  if (rows >= log.NumRows()) return log;
+  EstimationLog part = log;
+  std::vector<InputVector> inputs;
+  for (int k = 0; k < rows; ++k) inputs.push_back(log.inputs.input(k));
+  part.inputs = InputHold(std::vector<double>(t.begin(), t.begin() + rows), std::move(inputs));
+  part.values = log.values.topRows(rows);
+  return part;
 }
 
 }  // namespace coaxid

@@ -41,4 +41,7 @@ EstimationLog MakeEstimationLog(const Log& log, int begin_row = 0, int end_row =
 // fraction leaves fewer than two rows on either side.
 int HoldoutStart(int num_rows, double fraction, const std::string& source);
 
+// The rows of a log up to `seconds` after its first (the whole log if shorter).
+EstimationLog FirstSecondsOf(const EstimationLog& log, double seconds);
+
 }  // namespace coaxid

@@ -52,6 +52,11 @@ DEFINE_string(ekf_initial_report, "",
 DEFINE_double(ekf_process_noise, 1.0,
               "identify --method=ekf: multiplier of the default process-noise PSDs (raise it "
               "when the NIS in the report is above its band: model error)");
+DEFINE_bool(ekf_process_noise_from_data, true,
+            "identify --method=ekf: before the run, probe the first 20 s of the flight logs and "
+            "raise the velocity and rate process noise tenfold per pass until the filter stays "
+            "consistent (ident/ekf/process_noise_from_data.h); false: exactly "
+            "--ekf_process_noise");
 DEFINE_double(ekf_window_s, 1.0,
               "identify --method=ekf: prediction window of the fit and validation errors [s]");
 DEFINE_double(ekf_gate, 1e-6,

@@ -25,6 +25,7 @@ DECLARE_string(ekf_scale_anchor);
 DECLARE_string(ekf_transition);
 DECLARE_string(ekf_initial_report);
 DECLARE_double(ekf_process_noise);
+DECLARE_bool(ekf_process_noise_from_data);
 DECLARE_double(ekf_window_s);
 DECLARE_double(ekf_gate);
 DECLARE_int64(ekf_noise_adaptation_rows);

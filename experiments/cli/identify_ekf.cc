@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <set>
 
 #include <nlohmann/json.hpp>
@@ -28,6 +29,7 @@
 #include "ident/ekf/report.h"
 #include "ident/ekf/states_at_rows.h"
 #include "ident/estimation_log.h"
+#include "ident/ekf/process_noise_from_data.h"
 #include "ident/noise_weights.h"
 #include "ident/output_error/output_error.h"  // ChannelFitErrors
 
@@ -41,7 +43,7 @@ constexpr const char* kUsage =
     "usage: coaxid identify --method=ekf --logs=A.csv[,B.csv] --config=F --out=DIR "
     "[--validate=C.csv] [--holdout_fraction=0.2] [--smoother=true] "
     "[--ekf_scale_anchor=d|none] [--ekf_transition=linearised|sensitivities] "
-    "[--ekf_covariance_pass=true] [--ekf_process_noise=1] [--ekf_window_s=1] "
+    "[--ekf_covariance_pass=true] [--ekf_process_noise=1] [--ekf_process_noise_from_data=true] [--ekf_window_s=1] "
     "[--ekf_noise_adaptations=1] [--ekf_noise_adaptation_rows=120000] [--ekf_gate=1e-6] [--ekf_initial_report=R.json] "
     "[--prior=R.json[:name,...]]";
 
@@ -235,10 +237,43 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   for (const EstimationLog& log : estimation) {
     window_starts.push_back(WindowStartRows(log, FLAGS_ekf_window_s));
   }
-  EkfHistoryFiles history(estimation, options.smoother, fs::temp_directory_path().string(),
-                          window_starts);
-  const EkfResult result = RunEkf(vehicle, estimation, context.noise, options, &history);
-  if (!result.usable) throw ComputationError(result.failure);
+  // Process noise from the data (ident/ekf/process_noise_from_data.h): the
+  // probe over the first 20 s gives the starting scale; a run that still
+  // loses the filter later in the log is repeated with the PSDs raised
+  // tenfold, at most six times in all.
+  nlohmann::json process_noise_from_data;
+  ProcessNoiseFromData probe;
+  if (FLAGS_ekf_process_noise_from_data) {
+    probe = ProbeProcessNoise(vehicle, estimation, context.noise, options);
+    std::fprintf(stderr, "identify: ekf: %s\n", probe.note.c_str());
+  }
+  const auto say = [](const std::string& line) {
+    std::fprintf(stderr, "identify: ekf: %s; running again\n", line.c_str());
+  };
+  std::unique_ptr<EkfHistoryFiles> history;
+  const EkfResult result = RunRaisingProcessNoise(
+      options, &probe,
+      [&](const EkfOptions& o) {
+        history = std::make_unique<EkfHistoryFiles>(
+            estimation, o.smoother, fs::temp_directory_path().string(), window_starts);
+        return RunEkf(vehicle, estimation, context.noise, o, history.get());
+      },
+      say, FLAGS_ekf_process_noise_from_data ? 6 : 0);
+  const EkfOptions unraised = options;
+  options.state_psd = WithRaisedProcessNoise(unraised, probe.scale);
+  if (FLAGS_ekf_process_noise_from_data) {
+    context.notes.push_back(probe.note + ".");
+    process_noise_from_data = probe.ToJson();
+  }
+  if (!result.usable) {
+    throw ComputationError(result.failure +
+                           (FLAGS_ekf_process_noise_from_data
+                                ? " (with the velocity and rate process noise at " +
+                                      NumberText(probe.scale, "%g") +
+                                      " x the default, after raising it from the data; "
+                                      "--ekf_process_noise multiplies it further)"
+                                : std::string()));
+  }
   std::fprintf(stderr, "identify: ekf: done in %.2f s (propagation %.2f s, updates %.2f s, "
                "smoother %.2f s)\n", result.total_s, result.propagation_s, result.update_s,
                result.smoother_s);
@@ -252,7 +287,7 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   std::vector<Eigen::MatrixXd> fit_predictions;
   for (size_t i = 0; i < estimation.size(); ++i) {
     fit_predictions.push_back(WindowPredictions(
-        estimated, estimation[i], history.states_at_rows().Reported(static_cast<int>(i), smoothed),
+        estimated, estimation[i], history->states_at_rows().Reported(static_cast<int>(i), smoothed),
         FLAGS_ekf_window_s, options.integrator, &context.failed_fit_windows));
   }
   context.fit = ChannelFitErrors(estimation, fit_predictions);
@@ -264,7 +299,7 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
     for (int i = 0; i < fixed.parameters.size(); ++i) {
       fixed.parameters.mutable_parameter(i).estimated = false;
     }
-    EkfOptions state_only = options;
+    EkfOptions state_only = unraised;
     state_only.progress = nullptr;
     state_only.noise_adaptations = 0;
     for (const auto& [name, s] : result.noise.std) validation_noise.std[name] = s;
@@ -273,10 +308,23 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
     for (const EstimationLog& log : validation) {
       validation_starts.push_back(WindowStartRows(log, FLAGS_ekf_window_s));
     }
-    EkfStatesAtRows validation_states(validation_starts);
-    const EkfResult v =
-        RunEkf(fixed, validation, validation_noise, state_only, &validation_states);
+    // At the estimation's process noise, raised further if the model
+    // with the estimates loses the held-out data.
+    std::unique_ptr<EkfStatesAtRows> states;
+    ProcessNoiseFromData validation_probe;
+    validation_probe.scale = probe.scale;
+    const EkfResult v = RunRaisingProcessNoise(
+        state_only, &validation_probe,
+        [&](const EkfOptions& o) {
+          states = std::make_unique<EkfStatesAtRows>(validation_starts);
+          return RunEkf(fixed, validation, validation_noise, o, states.get());
+        },
+        say, FLAGS_ekf_process_noise_from_data ? 6 : 0);
     if (!v.usable) throw ComputationError("validation: " + v.failure);
+    if (validation_probe.scale > probe.scale) {
+      context.notes.push_back("Validation: " + validation_probe.note + ".");
+    }
+    const EkfStatesAtRows& validation_states = *states;
     for (size_t i = 0; i < validation.size(); ++i) {
       validation_predictions.push_back(WindowPredictions(
           estimated, validation[i], validation_states.Reported(static_cast<int>(i), smoothed),
@@ -306,11 +354,11 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
     WriteFileAtomically(dir + "/" + name, table);
     files.push_back(name);
   };
-  write_table("states.csv", [&](const EmitText& emit) { history.StatesCsv(emit); });
+  write_table("states.csv", [&](const EmitText& emit) { history->StatesCsv(emit); });
   write_table("parameters.csv", [&](const EmitText& emit) {
-    history.ParametersCsv(result.free_names, result.covariance_pass, emit);
+    history->ParametersCsv(result.free_names, result.covariance_pass, emit);
   });
-  write_table("innovations.csv", [&](const EmitText& emit) { history.InnovationsCsv(emit); });
+  write_table("innovations.csv", [&](const EmitText& emit) { history->InnovationsCsv(emit); });
   for (size_t i = 0; i < estimation.size(); ++i) {
     WriteMeasuredVersusModelCsv(dir + "/fit_" + estimation[i].name + ".csv", estimation[i],
                                 fit_predictions[i]);
@@ -326,7 +374,7 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   std::string plot_error;
   // The plots from the thinned copy (at most ~3000 rows a log, as they draw).
   EkfResult thinned = result;
-  thinned.logs = history.thinned();
+  thinned.logs = history->thinned();
   std::vector<Eigen::MatrixXd> thinned_fit;
   for (size_t i = 0; i < fit_predictions.size(); ++i) {
     const std::vector<int>& rows = thinned.logs[i].rows;
@@ -346,6 +394,9 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   }
   context.notes.push_back("Validation data: " + context.validation_description + ".");
   nlohmann::json report = EkfReportJson(result, options, initial, context);
+  if (!process_noise_from_data.is_null()) {
+    report["ekf"]["process_noise"]["from_data"] = process_noise_from_data;
+  }
   const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, NoiseFromData(estimation).std, &report);
   WriteJson(dir + "/report.json", report);
   if (run.print_estimates) PrintEstimates(result);

@@ -7,31 +7,13 @@
 #include "ident/noise_weights.h"
 
 namespace coaxid {
-namespace {
-
-// The rows of a log up to `seconds` after its first.
-EstimationLog FirstSeconds(const EstimationLog& log, double seconds) {
-  const std::vector<double>& t = log.inputs.times();
-  const int rows = static_cast<int>(
-      std::upper_bound(t.begin(), t.end(), t.front() + seconds) - t.begin());
-  if (rows >= log.NumRows()) return log;
-  EstimationLog part = log;
-  std::vector<InputVector> inputs;
-  for (int k = 0; k < rows; ++k) inputs.push_back(log.inputs.input(k));
-  part.inputs = InputHold(std::vector<double>(t.begin(), t.begin() + rows), std::move(inputs));
-  part.values = log.values.topRows(rows);
-  return part;
-}
-
-}  // namespace
-
 EkfStart StartFromEkfPass(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
                           double seconds) {
   EkfStart start;
   start.parameters = vehicle.parameters;
   std::vector<EstimationLog> flight;
   for (const EstimationLog& log : logs) {
-    if (log.kind == LogKind::kFlight) flight.push_back(FirstSeconds(log, seconds));
+    if (log.kind == LogKind::kFlight) flight.push_back(FirstSecondsOf(log, seconds));
   }
   if (flight.empty()) {
     start.note = "no flight log for an EKF start";

@@ -169,10 +169,19 @@ TEST_F(EkfCliTest, DivergenceExitsOneAndWritesNothing) {
   EXPECT_TRUE(Contains(r.output, "channel phi: every sample since t = 6.000 s rejected"))
       << r.output;
   EXPECT_FALSE(fs::exists(out + "/report.json"));
-  r = RunCoaxid(Identify(Path("fault.csv"), out, "--holdout_fraction=0 --ekf_gate=0"));
+  r = RunCoaxid(Identify(Path("fault.csv"), out,
+                         "--holdout_fraction=0 --ekf_gate=0 --ekf_process_noise_from_data=false"));
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_TRUE(Contains(r.output, "diverged")) << r.output;
   EXPECT_FALSE(fs::exists(out + "/report.json"));
+  // Without the gate, the process noise raised from the data lets the rates
+  // absorb the fault: the run ends, and its verdict says the fit is not the
+  // vehicle's (issue 17).
+  r = RunCoaxid(Identify(Path("fault.csv"), out, "--holdout_fraction=0 --ekf_gate=0"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(out + "/report.json"));
+  EXPECT_GT(report["ekf"]["process_noise"]["from_data"]["scale"].get<double>(), 1.0);
+  EXPECT_EQ(report["plausibility"]["describes_vehicle"], false) << report["plausibility"].dump();
 }
 
 }  // namespace
