@@ -99,13 +99,14 @@ void JudgeChannels(const nlohmann::json& fit, const char* where,
 PlausibilityVerdict JudgePlausibility(const ParameterSet& declared,
                                       const std::map<std::string, double>& estimates,
                                       const nlohmann::json& fit, const nlohmann::json& validation,
-                                      const std::map<std::string, double>& noise_std) {
+                                      const std::map<std::string, double>& noise_std,
+                                      const std::set<std::string>& undetermined) {
   PlausibilityVerdict verdict;
   JudgeChannels(fit, "estimation", noise_std, &verdict.findings);
   JudgeChannels(validation, "held-out", noise_std, &verdict.findings);
 
   for (const auto& [name, value] : estimates) {
-    if (!declared.Has(name)) continue;
+    if (!declared.Has(name) || undetermined.count(name)) continue;
     const Parameter& p = declared.Get(name);
     const double tolerance = 1e-6 * (p.upper - p.lower);  // as ParametersAtBounds
     const bool lower = value <= p.lower + tolerance, upper = value >= p.upper - tolerance;
@@ -194,7 +195,8 @@ std::string PlausibilityVerdict::Summary() const {
 }
 
 std::map<std::string, double> EstimatesOfReport(const nlohmann::json& parameters,
-                                                const ParameterSet& declared) {
+                                                const ParameterSet& declared,
+                                                std::set<std::string>* undetermined) {
   std::map<std::string, double> out;
   if (!parameters.is_object()) return out;
   for (auto it = parameters.begin(); it != parameters.end(); ++it) {
@@ -209,6 +211,7 @@ std::map<std::string, double> EstimatesOfReport(const nlohmann::json& parameters
       const Parameter& d = declared.Get(it.key());
       const double tolerance = 1e-6 * (d.upper - d.lower);  // as ParametersAtBounds
       if (value > d.lower + tolerance && value < d.upper - tolerance) continue;
+      if (undetermined) undetermined->insert(it.key());
     }
     out[it.key()] = value;
   }

@@ -29,6 +29,7 @@
 #pragma once
 
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -69,17 +70,23 @@ struct PlausibilityVerdict {
 // report.json "fit" and "validation" objects ({"<channel>": {"rms",
 // "nrmse", ...}, "overall_nrmse"}); either may be null. noise_std: each
 // channel's noise std where known (empty: judged by nrmse alone).
+// undetermined: estimates the fit found the logs do not determine; their
+// place at a bound is no finding (it is arbitrary), their value against the
+// physical ranges is.
 PlausibilityVerdict JudgePlausibility(const ParameterSet& declared,
                                       const std::map<std::string, double>& estimates,
                                       const nlohmann::json& fit, const nlohmann::json& validation,
-                                      const std::map<std::string, double>& noise_std = {});
+                                      const std::map<std::string, double>& noise_std = {},
+                                      const std::set<std::string>& undetermined = {});
 
 // The estimated parameters of a report.json "parameters" object (entries
 // with "estimated": true and a numeric value). Those the fit found
 // undetermined (std null) only where they sit at or beyond a bound of
-// `declared` (the fit pushed them there: inertias at 0.1 kg m^2 with the
-// scale held); elsewhere their value is arbitrary and the report says so.
+// `declared` (inertias pressed to 0.1 kg m^2 with the scale held: their
+// physical range is judged), named in *undetermined; elsewhere their value
+// is arbitrary and the report says so.
 std::map<std::string, double> EstimatesOfReport(const nlohmann::json& parameters,
-                                                const ParameterSet& declared);
+                                                const ParameterSet& declared,
+                                                std::set<std::string>* undetermined = nullptr);
 
 }  // namespace coaxid

@@ -20,8 +20,8 @@ void RequireNoEffectStates(const Vehicle& vehicle, const std::string& what) {
     if (i >= 0 && EffectLibrary()[i].num_own_states > 0) names += (names.empty() ? "" : ", ") + e;
   }
   throw InputError(what + " cannot fit a vehicle whose effects own states (" + names +
-                   "): the estimators do not carry effect states yet (issue 17); simulate with "
-                   "it, fit without it");
+                   "): it does not carry effect states yet (issue 17); identify "
+                   "--method=output_error and simulate do");
 }
 
 Vehicle MakeVehicle(const VehicleConfig& config) {

@@ -22,10 +22,10 @@ struct Vehicle {
   std::string ResolvedConfig() const { return ResolvedConfigYaml(config, parameters); }
 };
 
-// The estimators carry the 12 rigid-body states only, not yet an effect's
-// own states (stabilizer_bar): simulations fly such a vehicle, fits of it
-// are refused. Throws InputError naming the effect and `what` (the
-// estimator) when the vehicle has effect states.
+// Simulations and output-error carry an effect's own states (stabilizer_bar);
+// the EKF, discover and design do not yet and refuse such a vehicle. Throws
+// InputError naming the effect and `what` (the estimator) when the vehicle
+// has effect states.
 void RequireNoEffectStates(const Vehicle& vehicle, const std::string& what);
 
 // Builds the vehicle. Throws InputError on an unknown effect (listing the

@@ -33,7 +33,8 @@ bool MeasuresAMoment(const EstimationLog& log) {
 
 }  // namespace
 
-std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs) {
+std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs,
+                                      const VehicleModel& model) {
   std::vector<const EstimationLog*> flight;
   for (const EstimationLog& log : logs) {
     if (log.kind == LogKind::kFlight) flight.push_back(&log);
@@ -44,7 +45,8 @@ std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs) {
     for (int s = 0; s < count; ++s) {
       const int row = static_cast<int>((static_cast<long>(log->NumRows() - 1) * s) / count);
       ModelSample sample;
-      sample.x.setZero();
+      sample.x = Eigen::VectorXd::Zero(model.NumStates());
+      for (int i = kNumStates; i < model.NumStates(); ++i) sample.x[i] = i % 2 ? -0.01 : 0.01;
       for (int i = 0; i < kNumStates; ++i) {
         const int col = log->ChannelColumn(i);
         if (col >= 0 && std::isfinite(log->values(row, col))) sample.x[i] = log->values(row, col);
@@ -65,7 +67,8 @@ ScaleDirection FindScaleDirection(const VehicleModel& model, const ParameterSet&
   std::vector<int> candidates;
   for (int i = kAlpha; i < parameters.size(); ++i) candidates.push_back(i);
   const int nc = static_cast<int>(candidates.size());
-  const int rows_per_sample = kNumStates + kNumFlightChannels;
+  const int n = model.NumStates();
+  const int rows_per_sample = n + kNumFlightChannels;
   Eigen::MatrixXd J(rows_per_sample * samples.size(), nc);
   Eigen::MatrixXd dfdx, dfdp, dydp;
   for (size_t s = 0; s < samples.size(); ++s) {
@@ -76,8 +79,8 @@ ScaleDirection FindScaleDirection(const VehicleModel& model, const ParameterSet&
                                nullptr, nullptr, &dydp)) {
       return none;
     }
-    J.block(s * rows_per_sample, 0, kNumStates, nc) = dfdp;
-    J.block(s * rows_per_sample + kNumStates, 0, kNumFlightChannels, nc) = dydp;
+    J.block(s * rows_per_sample, 0, n, nc) = dfdp;
+    J.block(s * rows_per_sample + n, 0, kNumFlightChannels, nc) = dydp;
   }
   ScaleDirection out;
   out.direction = Eigen::VectorXd::Zero(theta.size());
@@ -125,7 +128,7 @@ ScaleGauge FixScaleGauge(const VehicleModel& model, const std::vector<Estimation
     gauge.fixed_by = balance_moment ? "balance log" : "no flight log";
     return gauge;
   }
-  gauge.direction = FindScaleDirection(model, *parameters, SamplePoints(logs));
+  gauge.direction = FindScaleDirection(model, *parameters, SamplePoints(logs, model));
   if (!gauge.direction.exists) {
     gauge.fixed_by = "the model (no common scale leaves the flight outputs unchanged)";
     return gauge;

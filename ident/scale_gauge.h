@@ -35,14 +35,17 @@
 namespace coaxid {
 
 struct ModelSample {
-  State x;
+  Eigen::VectorXd x;  // the model's states (effect states after the 12)
   HeldInput u;
 };
 
 // Operating points for the invariance check: up to 20 rows spread over the
 // flight logs, states as measured (0 where absent), the rows' inputs (as
-// logged: a lag's history does not enter a scale).
-std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs);
+// logged: a lag's history does not enter a scale). An effect's own states
+// (never logged) are set to 0.01, alternating in sign, so that the
+// parameters acting through them show in the check.
+std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs,
+                                      const VehicleModel& model);
 
 struct ScaleDirection {
   bool exists = false;

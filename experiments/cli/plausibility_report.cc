@@ -2,16 +2,19 @@
 
 #include <cstdio>
 #include <map>
+#include <set>
 #include <string>
 
 namespace coaxid {
 
 PlausibilityVerdict PlausibilityOfReport(const ParameterSet& declared, const nlohmann::json& report,
                                          const std::map<std::string, double>& sensor_noise_std) {
-  return JudgePlausibility(
-      declared, EstimatesOfReport(report.value("parameters", nlohmann::json::object()), declared),
-      report.value("fit", nlohmann::json()), report.value("validation", nlohmann::json()),
-      sensor_noise_std);
+  std::set<std::string> undetermined;
+  const std::map<std::string, double> estimates = EstimatesOfReport(
+      report.value("parameters", nlohmann::json::object()), declared, &undetermined);
+  return JudgePlausibility(declared, estimates, report.value("fit", nlohmann::json()),
+                           report.value("validation", nlohmann::json()), sensor_noise_std,
+                           undetermined);
 }
 
 PlausibilityVerdict AddPlausibility(const ParameterSet& declared,

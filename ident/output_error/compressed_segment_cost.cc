@@ -13,7 +13,8 @@ using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::Ro
 CompressedSegmentCost::CompressedSegmentCost(std::unique_ptr<FlightSegmentCost> segment)
     : segment_(std::move(segment)) {
   const int P = segment_->parameter_block_sizes()[1];
-  n_ = kNumStates + P;
+  states_ = segment_->parameter_block_sizes()[0];  // the model's, effect states included
+  n_ = states_ + P;
   compressed_ = segment_->NumOutputResiduals() > n_ + 1;
   *mutable_parameter_block_sizes() = segment_->parameter_block_sizes();
   const int continuity = segment_->num_residuals() - segment_->NumOutputResiduals();
@@ -29,15 +30,15 @@ bool CompressedSegmentCost::Evaluate(double const* const* parameters, double* re
                                      double** jacobians) const {
   if (!compressed_) return segment_->Evaluate(parameters, residuals, jacobians);
   const bool has_next = segment_->has_next();
-  const int P = n_ - kNumStates;
+  const int P = n_ - states_;
   const int m = segment_->num_residuals(), m_out = segment_->NumOutputResiduals();
   const int continuity = m - m_out;
   const bool want = jacobians && (jacobians[0] || jacobians[1] || (has_next && jacobians[2]));
   const bool at_kept =
       kept_.valid &&
-      Eigen::Map<const Eigen::VectorXd>(parameters[0], kNumStates) == kept_.start_state &&
+      Eigen::Map<const Eigen::VectorXd>(parameters[0], states_) == kept_.start_state &&
       Eigen::Map<const Eigen::VectorXd>(parameters[1], P) == kept_.theta_scaled &&
-      (!has_next || Eigen::Map<const Eigen::VectorXd>(parameters[2], kNumStates) ==
+      (!has_next || Eigen::Map<const Eigen::VectorXd>(parameters[2], states_) ==
                         kept_.next_state);
   if (!want && !at_kept) {
     thread_local Eigen::VectorXd r;
@@ -52,14 +53,14 @@ bool CompressedSegmentCost::Evaluate(double const* const* parameters, double* re
   if (!at_kept) {
     thread_local RowMajor J_state, J_theta, J_next;
     thread_local Eigen::VectorXd r;
-    J_state.resize(m, kNumStates);
+    J_state.resize(m, states_);
     J_theta.resize(m, P);
-    J_next.resize(has_next ? m : 0, kNumStates);
+    J_next.resize(has_next ? m : 0, states_);
     r.resize(m);
     double* full[] = {J_state.data(), J_theta.data(), has_next ? J_next.data() : nullptr};
     if (!segment_->Evaluate(parameters, r.data(), full)) return false;
     Eigen::MatrixXd A(m_out, n_);
-    A.leftCols(kNumStates) = J_state.topRows(m_out);
+    A.leftCols(states_) = J_state.topRows(m_out);
     A.rightCols(P) = J_theta.topRows(m_out);
     const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
     const Eigen::VectorXd qtr = qr.householderQ().adjoint() * r.head(m_out);
@@ -72,9 +73,9 @@ bool CompressedSegmentCost::Evaluate(double const* const* parameters, double* re
     kept_.continuity_theta = J_theta.bottomRows(continuity);
     kept_.continuity_next = has_next ? Eigen::MatrixXd(J_next.bottomRows(continuity))
                                      : Eigen::MatrixXd();
-    kept_.start_state = Eigen::Map<const Eigen::VectorXd>(parameters[0], kNumStates);
+    kept_.start_state = Eigen::Map<const Eigen::VectorXd>(parameters[0], states_);
     kept_.theta_scaled = Eigen::Map<const Eigen::VectorXd>(parameters[1], P);
-    if (has_next) kept_.next_state = Eigen::Map<const Eigen::VectorXd>(parameters[2], kNumStates);
+    if (has_next) kept_.next_state = Eigen::Map<const Eigen::VectorXd>(parameters[2], states_);
     kept_.valid = true;
   }
   Eigen::Map<Eigen::VectorXd>(residuals, num_residuals()) = kept_.residuals;
@@ -88,9 +89,9 @@ bool CompressedSegmentCost::Evaluate(double const* const* parameters, double* re
     if (top.size() > 0) J.topRows(n_) = top;
     J.bottomRows(continuity) = bottom;
   };
-  fill(0, kNumStates, kept_.R.leftCols(kNumStates), kept_.continuity_state);
+  fill(0, states_, kept_.R.leftCols(states_), kept_.continuity_state);
   fill(1, P, kept_.R.rightCols(P), kept_.continuity_theta);
-  if (has_next) fill(2, kNumStates, Eigen::MatrixXd(), kept_.continuity_next);
+  if (has_next) fill(2, states_, Eigen::MatrixXd(), kept_.continuity_next);
   return true;
 }
 

@@ -49,7 +49,8 @@ class CompressedSegmentCost : public ceres::CostFunction {
  private:
   std::unique_ptr<FlightSegmentCost> segment_;
   bool compressed_;
-  int n_;  // 12 + P compressed columns
+  int states_;  // the segment start block: the model's states (effect states after the 12)
+  int n_;       // states_ + P compressed columns
   // The kept compressed block: residuals (n + 1 + continuity) and the
   // Jacobian over [s_j | theta] (R, n x n upper triangular).
   struct Kept {

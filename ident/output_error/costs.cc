@@ -22,6 +22,7 @@ FlightSegmentCost::FlightSegmentCost(const VehicleModel& model, const FreeParame
       path_(path),
       first_(first),
       last_(last),
+      n_(model.NumStates()),
       has_next_(has_next),
       continuity_weight_(1.0 / continuity_std),
       simulators_(simulators ? std::move(simulators)
@@ -40,10 +41,10 @@ FlightSegmentCost::FlightSegmentCost(const VehicleModel& model, const FreeParame
     }
     if (any) rows_.push_back(k);
   }
-  set_num_residuals(static_cast<int>(terms_.size()) + (has_next ? kNumStates : 0));
-  mutable_parameter_block_sizes()->push_back(kNumStates);
+  set_num_residuals(static_cast<int>(terms_.size()) + (has_next ? n_ : 0));
+  mutable_parameter_block_sizes()->push_back(n_);
   mutable_parameter_block_sizes()->push_back(free.size());
-  if (has_next) mutable_parameter_block_sizes()->push_back(kNumStates);
+  if (has_next) mutable_parameter_block_sizes()->push_back(n_);
 }
 
 SegmentSimulators::SegmentSimulators(const VehicleModel& model, const FreeParameters& free,
@@ -84,7 +85,7 @@ const Trajectory* FlightSegmentCost::Simulate(const double* start_state,
   HeldInput start;
   if (path_) start = path_->At(first_, model_.InputLags(theta.data()));
   const bool ok = simulator.Run(log_.inputs, first_, last_,
-                                Eigen::Map<const Eigen::VectorXd>(start_state, kNumStates),
+                                Eigen::Map<const Eigen::VectorXd>(start_state, n_),
                                 &trajectory, path_ ? &start : nullptr);
   if (times_) {
     const long ns =
@@ -99,15 +100,15 @@ const Trajectory* FlightSegmentCost::Simulate(const double* start_state,
     plain_run_.trajectory.sensitivities.clear();
   }
   plain_run_.ok = ok;
-  plain_run_.start_state = Eigen::Map<const Eigen::VectorXd>(start_state, kNumStates);
+  plain_run_.start_state = Eigen::Map<const Eigen::VectorXd>(start_state, n_);
   plain_run_.theta_scaled = Eigen::Map<const Eigen::VectorXd>(theta_scaled, free_.size());
   plain_run_.valid = true;
   return ok ? &trajectory : nullptr;
 }
 
 bool FlightSegmentCost::Predict(const double* start_state, const double* theta_scaled,
-                                std::vector<Eigen::VectorXd>* outputs,
-                                Eigen::VectorXd* end_state) const {
+                                std::vector<Eigen::VectorXd>* outputs, Eigen::VectorXd* end_state,
+                                std::vector<Eigen::VectorXd>* states) const {
   const Trajectory* trajectory = Simulate(start_state, theta_scaled, false);
   if (!trajectory) return false;
   const Eigen::VectorXd theta = free_.Theta(theta_scaled);
@@ -118,6 +119,9 @@ bool FlightSegmentCost::Predict(const double* start_state, const double* theta_s
     const Eigen::VectorXd& x = trajectory->states[k - first_];
     FlightOutputsAt(model_, theta.data(), x.data(), trajectory->inputs[k - first_], y.data());
     outputs->push_back(y);
+  }
+  if (states) {
+    states->assign(trajectory->states.begin(), trajectory->states.begin() + (end - first_ + 1));
   }
   *end_state = trajectory->states.back();
   return true;
@@ -147,7 +151,7 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
   } output_timer{times_, std::chrono::steady_clock::now()};
   const int num_residuals = this->num_residuals();
   Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J_state(
-      want_state ? jacobians[0] : nullptr, want_state ? num_residuals : 0, kNumStates);
+      want_state ? jacobians[0] : nullptr, want_state ? num_residuals : 0, n_);
   Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J_theta(
       want_theta ? jacobians[1] : nullptr, want_theta ? num_residuals : 0, P);
 
@@ -179,16 +183,16 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
       const double weight = column_weight_[t.column];
       residuals[term] = weight * (y[t.channel] - log_.values(k, t.column));
       if (!sensitivities) continue;
-      const Eigen::MatrixXd& S = trajectory.sensitivities[i];  // 12 x (12 + P)
+      const Eigen::MatrixXd& S = trajectory.sensitivities[i];  // n x (n + P)
       if (t.channel < kNumStates && states_are_logged) {
-        if (want_state) J_state.row(term) = weight * S.block(t.channel, 0, 1, kNumStates);
+        if (want_state) J_state.row(term) = weight * S.block(t.channel, 0, 1, n_);
         if (want_theta) {
           J_theta.row(term) =
-              weight * S.block(t.channel, kNumStates, 1, P).cwiseProduct(free_.scales().transpose());
+              weight * S.block(t.channel, n_, 1, P).cwiseProduct(free_.scales().transpose());
         }
       } else {
         const Eigen::RowVectorXd dx = dydx.row(t.channel);
-        if (want_state) J_state.row(term) = weight * dx * S.leftCols(kNumStates);
+        if (want_state) J_state.row(term) = weight * dx * S.leftCols(n_);
         if (want_theta) {
           J_theta.row(term) = weight * (dx * S.rightCols(P) + dydp.row(t.channel))
                                              .cwiseProduct(free_.scales().transpose());
@@ -199,26 +203,24 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
   if (has_next_) {
     const int base = static_cast<int>(terms_.size());
     const Eigen::VectorXd& x_end = trajectory.states.back();
-    for (int s = 0; s < kNumStates; ++s) {
+    for (int s = 0; s < n_; ++s) {
       residuals[base + s] = continuity_weight_ * (x_end[s] - parameters[2][s]);
     }
     if (sensitivities) {
       const Eigen::MatrixXd& S = trajectory.sensitivities.back();
       if (want_state) {
-        J_state.block(base, 0, kNumStates, kNumStates) =
-            continuity_weight_ * S.leftCols(kNumStates);
+        J_state.block(base, 0, n_, n_) = continuity_weight_ * S.leftCols(n_);
       }
       if (want_theta) {
-        J_theta.block(base, 0, kNumStates, P) =
+        J_theta.block(base, 0, n_, P) =
             continuity_weight_ * S.rightCols(P) * free_.scales().asDiagonal();
       }
     }
     if (want_next) {
       Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J_next(
-          jacobians[2], num_residuals, kNumStates);
+          jacobians[2], num_residuals, n_);
       J_next.setZero();
-      J_next.block(base, 0, kNumStates, kNumStates) =
-          -continuity_weight_ * Eigen::MatrixXd::Identity(kNumStates, kNumStates);
+      J_next.block(base, 0, n_, n_) = -continuity_weight_ * Eigen::MatrixXd::Identity(n_, n_);
     }
   }
   for (int r = 0; r < num_residuals; ++r) {

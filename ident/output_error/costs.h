@@ -103,10 +103,12 @@ class FlightSegmentCost : public ceres::CostFunction {
   const std::vector<Term>& terms() const { return terms_; }
 
   // The model's outputs (15 flight channels) at rows first..end and the state
-  // at `last`, for given segment start state and scaled parameters. False if
-  // the simulation fails.
+  // at `last`, for given segment start state and scaled parameters; with
+  // `states`, the states (effect states included) at rows first..end too.
+  // False if the simulation fails.
   bool Predict(const double* start_state, const double* theta_scaled,
-               std::vector<Eigen::VectorXd>* outputs, Eigen::VectorXd* end_state) const;
+               std::vector<Eigen::VectorXd>* outputs, Eigen::VectorXd* end_state,
+               std::vector<Eigen::VectorXd>* states = nullptr) const;
 
  private:
   const VehicleModel& model_;
@@ -114,6 +116,7 @@ class FlightSegmentCost : public ceres::CostFunction {
   const EstimationLog& log_;
   const HeldInputPath* path_;
   int first_, last_;
+  int n_;  // the model's states (effect states after the 12): a segment's start block
   bool has_next_;
   double continuity_weight_;
   std::vector<double> column_weight_;  // 1 / noise std per log channel column

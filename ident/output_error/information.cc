@@ -14,12 +14,18 @@ namespace {
 
 using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
+// The segment start block's size: the model's states, effect states included.
+int SegmentStates(const LogResidualBlocks& log) {
+  return log.segments.empty() ? 0 : log.segments.front()->parameter_block_sizes()[0];
+}
+
 // Columns of the free segment-state coordinates in H_ss: index[j][s], -1 for
 // a coordinate held constant.
-std::vector<std::array<int, kNumStates>> StateColumns(const LogResidualBlocks& log, int* next) {
-  std::vector<std::array<int, kNumStates>> index(log.segments.size());
+std::vector<std::vector<int>> StateColumns(const LogResidualBlocks& log, int* next) {
+  const int ns = SegmentStates(log);
+  std::vector<std::vector<int>> index(log.segments.size(), std::vector<int>(ns));
   for (size_t j = 0; j < log.segments.size(); ++j) {
-    for (int s = 0; s < kNumStates; ++s) {
+    for (int s = 0; s < ns; ++s) {
       const bool held = j == 0 && std::find(log.held_states.begin(), log.held_states.end(), s) !=
                                       log.held_states.end();
       index[j][s] = held ? -1 : (*next)++;
@@ -37,7 +43,7 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
   Eigen::MatrixXd H_tt = Eigen::MatrixXd::Zero(P, P);
   Eigen::MatrixXd balance = Eigen::MatrixXd::Zero(P, P);
   int n = 0;
-  std::vector<std::vector<std::array<int, kNumStates>>> columns;
+  std::vector<std::vector<std::vector<int>>> columns;
   for (const LogResidualBlocks& log : logs) columns.push_back(StateColumns(log, &n));
   Eigen::MatrixXd H_st = Eigen::MatrixXd::Zero(n, P);
   std::vector<Eigen::Triplet<double>> H_ss;
@@ -62,12 +68,13 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
     if (log.segments.empty()) continue;
     OutputErrorInformation::FlightRows& rows = out.flight[i];
     const int channels = log.log->NumChannels(), N = log.log->NumRows();
+    const int ns = SegmentStates(log);
     if (keep_flight_rows) {
       rows.num_channels = channels;
       rows.sensitivities = Eigen::MatrixXd::Zero(N * channels, P);
       rows.residuals = Eigen::MatrixXd::Zero(N, channels);
       rows.present = Eigen::MatrixXd::Zero(N, channels);
-      output_state_jacobians[i] = Eigen::MatrixXd::Zero(N * channels, kNumStates);
+      output_state_jacobians[i] = Eigen::MatrixXd::Zero(N * channels, ns);
       output_segment[i].assign(N * channels, -1);
     }
     for (size_t j = 0; j < log.segments.size(); ++j) {
@@ -76,7 +83,7 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
           keep_flight_rows || log.compressed.empty() ? segment : *log.compressed[j];
       const int m = cost.num_residuals();
       const bool next = segment.has_next();
-      RowMajor J_s(m, kNumStates), J_t(m, P), J_n(next ? m : 0, kNumStates);
+      RowMajor J_s(m, ns), J_t(m, P), J_n(next ? m : 0, ns);
       Eigen::VectorXd r(m);
       const double* parameters[] = {log.segment_states[j], theta_scaled,
                                     next ? log.segment_states[j + 1] : nullptr};
@@ -86,13 +93,13 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
                                "(rows " + std::to_string(segment.first()) + "-" +
                                std::to_string(segment.last()) + ")");
       }
-      for (int s = 0; s < kNumStates; ++s) {
+      for (int s = 0; s < ns; ++s) {
         if (columns[i][j][s] < 0) J_s.col(s).setZero();
       }
       // [J_s | J_n] against its state columns.
-      RowMajor A(m, next ? 2 * kNumStates : kNumStates);
-      A.leftCols(kNumStates) = J_s;
-      if (next) A.rightCols(kNumStates) = J_n;
+      RowMajor A(m, next ? 2 * ns : ns);
+      A.leftCols(ns) = J_s;
+      if (next) A.rightCols(ns) = J_n;
       std::vector<int> index(columns[i][j].begin(), columns[i][j].end());
       if (next) index.insert(index.end(), columns[i][j + 1].begin(), columns[i][j + 1].end());
       const Eigen::MatrixXd AtA = A.transpose() * A, AtJ = A.transpose() * J_t;
@@ -131,7 +138,7 @@ OutputErrorInformation ComputeOutputErrorInformation(const std::vector<LogResidu
     for (size_t row = 0; row < output_segment[i].size(); ++row) {
       const int j = output_segment[i][row];
       if (j < 0) continue;
-      for (int s = 0; s < kNumStates; ++s) {
+      for (int s = 0; s < static_cast<int>(columns[i][j].size()); ++s) {
         const int c = columns[i][j][s];
         if (c >= 0) {
           out.flight[i].sensitivities.row(row) -= output_state_jacobians[i](row, s) * X.row(c);

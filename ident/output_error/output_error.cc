@@ -189,14 +189,23 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
     }
     FittedSegments& seg = a.segments[i];
     seg.starts = SegmentStarts(log, segment_s);
-    for (int start : seg.starts) seg.states.push_back(start_state(i, start));
+    // Segment start states: the model's (an effect's own states, never
+    // logged, start at 0 and are estimated like the others).
+    const int n = vehicle.model.NumStates();
+    for (int start : seg.starts) {
+      Eigen::VectorXd x = start_state(i, start);
+      const int given = static_cast<int>(x.size());
+      x.conservativeResize(n);
+      if (given < n) x.tail(n - given).setZero();
+      seg.states.push_back(std::move(x));
+    }
     const std::vector<int> unobservable = UnobservableStates(log, vehicle.model);
     for (size_t j = 0; j < seg.starts.size(); ++j) {
       double* block = seg.states[j].data();
-      a.problem->AddParameterBlock(block, kNumStates);
+      a.problem->AddParameterBlock(block, n);
       a.state_blocks.push_back(block);
       if (j == 0 && !unobservable.empty()) {
-        a.problem->SetManifold(block, new ceres::SubsetManifold(kNumStates, unobservable));
+        a.problem->SetManifold(block, new ceres::SubsetManifold(n, unobservable));
       }
     }
     for (size_t j = 0; j < seg.starts.size(); ++j) {
@@ -371,7 +380,6 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   std::string why;
   if (!options.IsValid(&why)) throw InputError("output-error options: " + why);
   if (logs.empty()) throw InputError("output-error needs at least one log");
-  RequireNoEffectStates(declared, "output_error");
   for (const ParameterPrior& prior : options.priors) {
     if (!declared.parameters.Has(prior.name) || !(prior.std > 0) || !std::isfinite(prior.value)) {
       throw InputError("output-error prior on '" + prior.name +
@@ -488,11 +496,12 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
                                  seg.starts.begin()) - 1;
         j = std::max(j, 0);
         if (seg.starts[j] == row) return seg.states[j];
-        std::vector<Eigen::VectorXd> outputs;
+        std::vector<Eigen::VectorXd> outputs, states;
         Eigen::VectorXd end_state;
-        if (costs[j]->Predict(seg.states[j].data(), theta_scaled.data(), &outputs, &end_state) &&
-            row - seg.starts[j] < static_cast<int>(outputs.size())) {
-          return outputs[row - seg.starts[j]].head(kNumStates);
+        if (costs[j]->Predict(seg.states[j].data(), theta_scaled.data(), &outputs, &end_state,
+                              &states) &&
+            row - seg.starts[j] < static_cast<int>(states.size())) {
+          return states[row - seg.starts[j]];
         }
         return InitialStateFromLog(logs[log_index], row);
       };

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <set>
+
 #include "core/vehicle_config.h"
 
 namespace coaxid {
@@ -118,11 +121,20 @@ TEST(Plausibility, AChannelHoldingOnlyNoiseIsNotUnexplained) {
   EXPECT_EQ(from_report.size(), 1u);
   EXPECT_EQ(from_report.count("Ixx"), 1u);
   EXPECT_TRUE(JudgePlausibility(p, from_report, nullptr, nullptr).DescribesVehicle());
+  // Pressed to a bound: judged against the physical ranges (Iyy at 0.1 kg
+  // m^2 is 8x what 0.25 kg of this size can have); the bound itself is no
+  // finding for an undetermined parameter (sigma0 at 0 in a flight-only fit).
   parameters["Iyy"] = {{"value", 0.1}, {"std", nullptr}, {"estimated", true}};
-  from_report = EstimatesOfReport(parameters, p);
-  EXPECT_EQ(from_report.count("Iyy"), 1u);
-  const PlausibilityVerdict v = JudgePlausibility(p, from_report, nullptr, nullptr);
-  EXPECT_EQ(Subjects(v, Kind::kAtBound), std::vector<std::string>{"Iyy"});
+  parameters["sigma0"] = {{"value", 0.0}, {"std", nullptr}, {"estimated", true}};
+  std::set<std::string> undetermined;
+  from_report = EstimatesOfReport(parameters, p, &undetermined);
+  EXPECT_EQ(undetermined, (std::set<std::string>{"Iyy", "sigma0"}));
+  const PlausibilityVerdict v =
+      JudgePlausibility(p, from_report, nullptr, nullptr, {}, undetermined);
+  EXPECT_TRUE(Subjects(v, Kind::kAtBound).empty());
+  const std::vector<std::string> outside = Subjects(v, Kind::kOutsidePhysicalRange);
+  EXPECT_NE(std::find(outside.begin(), outside.end(), "Iyy"), outside.end());
+  EXPECT_EQ(std::find(outside.begin(), outside.end(), "sigma0"), outside.end());
   // Parameters the fit did not estimate are the user's: not judged.
   std::map<std::string, double> e = AtConfig(p);
   e.erase("d");
