@@ -21,7 +21,7 @@ void RequireNoEffectStates(const Vehicle& vehicle, const std::string& what) {
   }
   throw InputError(what + " cannot fit a vehicle whose effects own states (" + names +
                    "): it does not carry effect states yet (issue 17); identify "
-                   "--method=output_error and simulate do");
+                   "--method=output_error, discover and simulate do");
 }
 
 Vehicle MakeVehicle(const VehicleConfig& config) {

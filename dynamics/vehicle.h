@@ -22,8 +22,8 @@ struct Vehicle {
   std::string ResolvedConfig() const { return ResolvedConfigYaml(config, parameters); }
 };
 
-// Simulations and output-error carry an effect's own states (stabilizer_bar);
-// the EKF, discover and design do not yet and refuse such a vehicle. Throws
+// Simulations, output-error and discover carry an effect's own states
+// (stabilizer_bar); the EKF and design do not yet and refuse such a vehicle. Throws
 // InputError naming the effect and `what` (the estimator) when the vehicle
 // has effect states.
 void RequireNoEffectStates(const Vehicle& vehicle, const std::string& what);

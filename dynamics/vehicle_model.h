@@ -6,10 +6,13 @@
 // full parameter vector of a ParameterSet (STYLE.md, item 2).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
 #include <type_traits>
+
+#include <Eigen/Core>
 
 #include "core/parameters.h"
 #include "core/vehicle_config.h"
@@ -45,6 +48,15 @@ class VehicleModel {
   // of enabled effects that own some (stabilizer_bar), in library order.
   int NumStates() const { return kNumStates + num_effect_states_; }
   bool HasEffectStates() const { return num_effect_states_ > 0; }
+  // x (at least the 12 rigid-body states) as this model's state vector: the
+  // effect states x does not hold set to `effect_state` (0: at rest; a small
+  // value where their parameters must show, as in sensitivity checks).
+  Eigen::VectorXd StateOf(const Eigen::VectorXd& x, double effect_state = 0.0) const {
+    Eigen::VectorXd out = Eigen::VectorXd::Constant(NumStates(), effect_state);
+    const int given = std::min<int>(static_cast<int>(x.size()), NumStates());
+    out.head(given) = x.head(given);
+    return out;
+  }
   // Index in the state vector of library effect i's first own state, or -1.
   int EffectStateOffset(int library_index) const { return state_offset_[library_index]; }
 

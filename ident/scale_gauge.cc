@@ -45,12 +45,12 @@ std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs,
     for (int s = 0; s < count; ++s) {
       const int row = static_cast<int>((static_cast<long>(log->NumRows() - 1) * s) / count);
       ModelSample sample;
-      sample.x = Eigen::VectorXd::Zero(model.NumStates());
-      for (int i = kNumStates; i < model.NumStates(); ++i) sample.x[i] = i % 2 ? -0.01 : 0.01;
+      Eigen::VectorXd x = Eigen::VectorXd::Zero(kNumStates);
       for (int i = 0; i < kNumStates; ++i) {
         const int col = log->ChannelColumn(i);
-        if (col >= 0 && std::isfinite(log->values(row, col))) sample.x[i] = log->values(row, col);
+        if (col >= 0 && std::isfinite(log->values(row, col))) x[i] = log->values(row, col);
       }
+      sample.x = model.StateOf(x, 0.01);
       sample.u = HeldInput::Steady(log->inputs.input(row), log->inputs.time(row));
       samples.push_back(sample);
     }

@@ -42,8 +42,8 @@ struct ModelSample {
 // Operating points for the invariance check: up to 20 rows spread over the
 // flight logs, states as measured (0 where absent), the rows' inputs (as
 // logged: a lag's history does not enter a scale). An effect's own states
-// (never logged) are set to 0.01, alternating in sign, so that the
-// parameters acting through them show in the check.
+// (never logged) are set to 0.01, so that the parameters acting through
+// them show in the check.
 std::vector<ModelSample> SamplePoints(const std::vector<EstimationLog>& logs,
                                       const VehicleModel& model);
 

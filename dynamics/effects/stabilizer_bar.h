@@ -29,10 +29,13 @@ struct StabilizerBarEffect : EffectBase {
   static constexpr int kNumOwnStates = 2;
   // Typical: the Skybotix CoaX (bar time constant about 1.8 s; linkage 0.61
   // in the public CoaX simulator's parameters; upper hub 0.165 m above G).
+  // k_b is linearised at 0.05, beside absence: at k_b = 0 the outputs do not
+  // depend on T_b or d_u, and the closing loop's score would see one
+  // direction of three.
   static const std::vector<EffectParameterSpec>& Parameters() {
     static const std::vector<EffectParameterSpec> p = {
         {"T_b", 1.0, 0.05, 10.0, 1.0, 1.8, "s"},
-        {"k_b", 0.0, 0.0, 2.0, 0.5, 0.6, ""},
+        {"k_b", 0.0, 0.0, 2.0, 0.5, 0.6, "", 0.05},
         {"d_u", 0.15, 0.0, 0.5, 0.15, 0.165, "m"}};
     return p;
   }

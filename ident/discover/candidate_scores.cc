@@ -92,7 +92,8 @@ std::vector<std::string> ChannelsReachedBy(const Vehicle& v,
         double y[kNumBalanceChannels];
         ok = BalanceOutputJacobians(v.model, theta, log.inputs.input(k), idx, y, &dydp);
       } else {
-        const Eigen::VectorXd x = InitialStateFromLog(log, k);
+        // Effect states (a bar's tilt) at 0.01: their parameters act through them.
+        const Eigen::VectorXd x = v.model.StateOf(InitialStateFromLog(log, k), 0.01);
         double y[kNumFlightChannels];
         ok = FlightOutputJacobians(v.model, theta, x.data(), held[k], idx, y, nullptr,
                                    &dydp);
@@ -113,7 +114,7 @@ std::vector<std::string> ChannelsReachedBy(const Vehicle& v,
         if (m > 1e-3 * s) reached.push_back(name);
       }
       if (log.kind == LogKind::kFlight) {
-        const Eigen::VectorXd x = InitialStateFromLog(log, k);
+        const Eigen::VectorXd x = v.model.StateOf(InitialStateFromLog(log, k), 0.01);
         Eigen::MatrixXd dfdx, dfdp;
         if (!DerivativeJacobians(v.model, theta, x.data(), held[k], held[k].t0, idx, &dfdx,
                                  &dfdp)) {
@@ -247,9 +248,6 @@ CandidatePass LinearisePass(const Vehicle& fitted, const OutputErrorResult& fit,
   std::map<std::string, double> absent;  // parameters linearised beside absence
   for (const EffectInfo& info : EffectLibrary()) {
     if (std::find(present.begin(), present.end(), info.name) != present.end()) continue;
-    // The estimators do not carry effect states yet (issue 17): such an
-    // effect (stabilizer_bar) is not a candidate until they do.
-    if (info.num_own_states > 0) continue;
     pass.candidates.push_back(info.name);
     augmented = CandidateVehicle(augmented, info.name);
     for (const auto& spec : info.parameters) {

@@ -414,7 +414,6 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   std::string why;
   if (!options.IsValid(&why)) throw InputError("discover options: " + why);
   if (estimation.empty()) throw InputError("discover: no estimation log");
-  RequireNoEffectStates(declared, "discover");
   DiscoveryResult out;
   DiscoveryOptions o = options;
   o.fit.function_tolerance = std::max(o.fit.function_tolerance, o.fit_function_tolerance);

@@ -36,10 +36,10 @@ struct ClusterJob {
 };
 
 // Cluster ends of a flight segment's residuals (FlightSegmentCost's order:
-// rows first..end, each row's finite channels, then the 12 continuity
-// residuals, which go with the last cluster): every `rows` rows.
+// rows first..end, each row's finite channels, then the continuity
+// residuals, one per state, which go with the last cluster): every `rows` rows.
 std::vector<int> SegmentClusterEnds(const EstimationLog& log, int first, int last, bool has_next,
-                                    int rows) {
+                                    int rows, int num_states) {
   std::vector<int> ends;
   const int end = has_next ? last - 1 : last;
   int residuals = 0;
@@ -48,7 +48,7 @@ std::vector<int> SegmentClusterEnds(const EstimationLog& log, int first, int las
     const bool boundary = (k - first + 1) % rows == 0 && end - k >= rows / 2;
     if (boundary && residuals > (ends.empty() ? 0 : ends.back())) ends.push_back(residuals);
   }
-  if (has_next) residuals += kNumStates;
+  if (has_next) residuals += num_states;
   if (ends.empty() || ends.back() < residuals) {
     ends.push_back(residuals);
   } else {
@@ -97,13 +97,14 @@ void Evaluate(ClusterJob* job) {
 
 }  // namespace
 
-LinearisedFit::LinearisedFit(int num_segments, std::vector<std::string> names,
-                             Eigen::VectorXd scales)
-    : num_state_columns(kNumStates * num_segments),
+LinearisedFit::LinearisedFit(int num_segments, int states_per_segment,
+                             std::vector<std::string> names, Eigen::VectorXd scales)
+    : states_per_segment(states_per_segment),
+      num_state_columns(states_per_segment * num_segments),
       parameter_names(std::move(names)),
       parameter_scales(std::move(scales)),
-      state_diagonal(num_segments, StateBlock::Zero()),
-      state_next(num_segments, StateBlock::Zero()),
+      state_diagonal(num_segments, StateBlock::Zero(states_per_segment, states_per_segment)),
+      state_next(num_segments, StateBlock::Zero(states_per_segment, states_per_segment)),
       state_parameter(Eigen::MatrixXd::Zero(num_state_columns, parameter_names.size())),
       parameter_normal(Eigen::MatrixXd::Zero(parameter_names.size(), parameter_names.size())) {
   CHECK_EQ(parameter_scales.size(), NumParameters());
@@ -130,11 +131,12 @@ void LinearisedFit::AddNormal(const std::vector<int>& columns, const Eigen::Matr
       } else if (i < S && j >= S) {
         state_parameter(i, j - S) += block(a, c);
       } else if (i < S && j < S) {
-        const int si = i / kNumStates, sj = j / kNumStates;
+        const int ns = states_per_segment;
+        const int si = i / ns, sj = j / ns;
         if (si == sj) {
-          state_diagonal[si](i % kNumStates, j % kNumStates) += block(a, c);
+          state_diagonal[si](i % ns, j % ns) += block(a, c);
         } else if (sj == si + 1) {
-          state_next[si](i % kNumStates, j % kNumStates) += block(a, c);
+          state_next[si](i % ns, j % ns) += block(a, c);
         } else {
           CHECK_EQ(si, sj + 1) << "a residual block couples segments " << si << " and " << sj
                                << ", which are not neighbours";
@@ -158,7 +160,7 @@ void LinearisedFit::AddCluster(const std::vector<int>& columns, const Eigen::Vec
   }
   c.first_state_column = last < 0 ? 0 : first;
   c.states = Eigen::VectorXd::Zero(last < 0 ? 0 : last - first + 1);
-  CHECK_LE(c.states.size(), 2 * kNumStates) << "a cluster spans more than two segments";
+  CHECK_LE(c.states.size(), 2 * states_per_segment) << "a cluster spans more than two segments";
   for (size_t a = 0; a < columns.size(); ++a) {
     const int j = columns[a];
     if (j < num_state_columns) {
@@ -220,8 +222,16 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
     theta_residual[k] = value / free.scales()[k];
   }
   const bool residual_elsewhere = !residual_values.empty();
+  // The model's states per segment (effect states included); a fit of a
+  // model without them (the declared one, linearised with a candidate that
+  // owns states) gives them at rest, 0.
+  const int ns = vehicle.model.NumStates();
+  std::vector<FittedSegments> padded = segments;
+  for (FittedSegments& s : padded) {
+    for (Eigen::VectorXd& x : s.states) x = vehicle.model.StateOf(x);
+  }
   int state_columns = 0;
-  for (const FittedSegments& s : segments) state_columns += kNumStates * s.starts.size();
+  for (const FittedSegments& s : padded) state_columns += ns * s.starts.size();
   const int theta_column = state_columns;
 
   std::vector<std::unique_ptr<HeldInputPath>> paths;  // per log, shared by its segments
@@ -249,7 +259,7 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
       }
       continue;
     }
-    const FittedSegments& seg = segments[i];
+    const FittedSegments& seg = padded[i];
     CHECK(!seg.starts.empty()) << log.source << ": a flight log needs its fitted segments";
     for (size_t j = 0; j < seg.starts.size(); ++j) {
       const bool has_next = j + 1 < seg.starts.size();
@@ -259,14 +269,15 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
                                                      has_next, channel_std,
                                                      options.continuity_std, options.integrator,
                                                      paths[i].get());
-      job.cluster_ends = SegmentClusterEnds(log, seg.starts[j], last, has_next, cluster_rows[i]);
+      job.cluster_ends =
+          SegmentClusterEnds(log, seg.starts[j], last, has_next, cluster_rows[i], ns);
       CHECK_EQ(job.cluster_ends.back(), job.cost->num_residuals());
       job.stratum = static_cast<int>(i);
       job.blocks = {seg.states[j].data(), theta_scaled.data()};
-      job.block_columns = {segment_column + kNumStates * static_cast<int>(j), theta_column};
+      job.block_columns = {segment_column + ns * static_cast<int>(j), theta_column};
       if (has_next) {
         job.blocks.push_back(seg.states[j + 1].data());
-        job.block_columns.push_back(segment_column + kNumStates * static_cast<int>(j + 1));
+        job.block_columns.push_back(segment_column + ns * static_cast<int>(j + 1));
       }
       if (residual_elsewhere) {
         job.residual_blocks = job.blocks;
@@ -274,7 +285,28 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
       }
       jobs.push_back(std::move(job));
     }
-    segment_column += kNumStates * static_cast<int>(seg.starts.size());
+    // States the fit did not carry (a candidate's own, a stabilizer bar's
+    // tilt) start at rest on the log's first segment and then where the
+    // previous segment left them, with the residual's parameters (every
+    // candidate absent: the rigid body moves as fitted), so that their
+    // continuity ties hold and r stays the fit's own.
+    const int given = segments[i].states.empty() ? ns : segments[i].states.front().size();
+    if (given < ns) {
+      const size_t first_job = jobs.size() - seg.starts.size();
+      for (size_t j = 0; j + 1 < seg.starts.size(); ++j) {
+        const auto* cost = static_cast<const FlightSegmentCost*>(jobs[first_job + j].cost.get());
+        std::vector<Eigen::VectorXd> outputs;
+        Eigen::VectorXd end_state;
+        if (!cost->Predict(padded[i].states[j].data(),
+                           residual_elsewhere ? theta_residual.data() : theta_scaled.data(),
+                           &outputs, &end_state)) {
+          *why = "the model cannot be evaluated along the fitted trajectory (CVODE failed)";
+          return false;
+        }
+        padded[i].states[j + 1].tail(ns - given) = end_state.tail(ns - given);
+      }
+    }
+    segment_column += ns * static_cast<int>(seg.starts.size());
   }
 
   // Clusters are independent simulations: evaluated on the fit's threads.
@@ -288,7 +320,7 @@ bool LineariseFit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs
   for (std::thread& t : pool) t.join();
 
   LinearisedFit& f = *out;
-  f = LinearisedFit(state_columns / kNumStates, free.names(), free.scales());
+  f = LinearisedFit(state_columns / ns, ns, free.names(), free.scales());
   for (ClusterJob& job : jobs) {
     if (!job.ok) {
       *why = "the model cannot be evaluated along the fitted trajectory (CVODE failed)";
@@ -318,11 +350,12 @@ class BlockTridiagonalSolver {
   using Block = LinearisedFit::StateBlock;
   explicit BlockTridiagonalSolver(const LinearisedFit& fit) : fit_(fit) {
     const int S = static_cast<int>(fit.state_diagonal.size());
+    const int ns = fit.states_per_segment;
     pivots_.reserve(S);
-    Block previous_inverse_times_next = Block::Zero();  // Lambda_{j-1}^-1 N_{j-1,j}
+    Block previous_inverse_times_next = Block::Zero(ns, ns);  // Lambda_{j-1}^-1 N_{j-1,j}
     for (int j = 0; j < S; ++j) {
       Block lambda = fit.state_diagonal[j];
-      for (int k = 0; k < kNumStates; ++k) {
+      for (int k = 0; k < ns; ++k) {
         const double d = lambda(k, k);
         lambda(k, k) += d > 0 ? 1e-10 * d : 1.0;
       }
@@ -336,7 +369,8 @@ class BlockTridiagonalSolver {
   Eigen::MatrixXd Solve(const Eigen::MatrixXd& B) const {
     const int S = static_cast<int>(pivots_.size());
     Eigen::MatrixXd X = B;
-    auto rows = [&X](int j) { return X.middleRows(kNumStates * j, kNumStates); };
+    const int ns = fit_.states_per_segment;
+    auto rows = [&X, ns](int j) { return X.middleRows(ns * j, ns); };
     for (int j = 1; j < S; ++j) {  // forward: y_j = b_j - N_j-1,j^T Lambda_j-1^-1 y_j-1
       rows(j) -= fit_.state_next[j - 1].transpose() * pivots_[j - 1].solve(rows(j - 1));
     }

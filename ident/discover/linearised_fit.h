@@ -36,8 +36,10 @@
 namespace coaxid {
 
 struct LinearisedFit {
-  // Columns: the segment start states, kNumStates per segment in log order,
-  // then the free parameters (scaled: column = d r / d(value / scale)).
+  // Columns: the segment start states, states_per_segment (the model's
+  // states, effect states included) per segment in log order, then the free
+  // parameters (scaled: column = d r / d(value / scale)).
+  int states_per_segment = kNumStates;
   int num_state_columns = 0;
   std::vector<std::string> parameter_names;
   Eigen::VectorXd parameter_scales;
@@ -45,7 +47,7 @@ struct LinearisedFit {
   // continuity tie to the next segment of its log, nothing else, so N_ss is
   // block tridiagonal: memory and work grow linearly with the log's length
   // (a dense N of a 20-minute flight's 1200 segments held 14,000^2 entries).
-  using StateBlock = Eigen::Matrix<double, kNumStates, kNumStates>;
+  using StateBlock = Eigen::MatrixXd;  // states_per_segment square
   std::vector<StateBlock> state_diagonal;  // N_jj, per segment
   std::vector<StateBlock> state_next;      // N_j,j+1 (zero for a log's last segment)
   Eigen::MatrixXd state_parameter;         // N_s,theta (state columns x parameters)
@@ -65,7 +67,8 @@ struct LinearisedFit {
 
   // An empty fit (N = 0, no cluster) over these columns.
   LinearisedFit() = default;
-  LinearisedFit(int num_segments, std::vector<std::string> names, Eigen::VectorXd scales);
+  LinearisedFit(int num_segments, int states_per_segment, std::vector<std::string> names,
+                Eigen::VectorXd scales);
 
   int NumColumns() const { return num_state_columns + NumParameters(); }
   int NumParameters() const { return static_cast<int>(parameter_names.size()); }

@@ -38,6 +38,19 @@ class CoaxCliTest : public CliTestDir {
     return log;
   }
 
+  // configs/coax.yaml with the stabilizer bar declared at these values.
+  std::string CoaxConfigWithBar(double T_b, double k_b, double d_u) {
+    const std::string config = Path("coax_bar.yaml");
+    std::string text = ReadFile(kCoax);
+    const std::string at = "effects:\n";
+    text.replace(text.rfind(at), at.size(),
+                 at + "  stabilizer_bar: {T_b: {value: " + std::to_string(T_b) +
+                     "}, k_b: {value: " + std::to_string(k_b) + "}, d_u: {value: " +
+                     std::to_string(d_u) + "}}\n");
+    std::ofstream(config) << text;
+    return config;
+  }
+
   // The channels a report's plausibility verdict names as unexplained.
   static std::set<std::string> Unexplained(const nlohmann::json& report) {
     std::set<std::string> out;
@@ -96,15 +109,7 @@ TEST_F(CoaxCliTest, OutputErrorReportsWhatTheFitCannotDo) {
 // plausible.
 TEST_F(CoaxCliTest, OutputErrorWithTheBarDeclaredRecoversIt) {
   const std::string log = SimulateCoaxFlight();
-  const std::string config = Path("coax_bar.yaml");
-  {
-    std::string text = ReadFile(kCoax);
-    const std::string at = "effects:\n";
-    text.replace(text.rfind(at), at.size(),
-                 at + "  stabilizer_bar: {T_b: {value: 1.0}, k_b: {value: 0.3}, "
-                      "d_u: {value: 0.15}}\n");
-    std::ofstream(config) << text;
-  }
+  const std::string config = CoaxConfigWithBar(1.0, 0.3, 0.15);
   const RunResult r = RunCoaxid("identify --method=output_error --config=" + config +
                                 " --logs=" + log + " --out=" + Path("oe"));
   ASSERT_EQ(r.status, 0) << r.output;
@@ -121,15 +126,7 @@ TEST_F(CoaxCliTest, OutputErrorWithTheBarDeclaredRecoversIt) {
 }
 
 TEST_F(CoaxCliTest, ABarInTheConfigIsFlownButNotFittedByTheEkf) {
-  const std::string config = Path("coax_bar.yaml");
-  {
-    std::string text = ReadFile(kCoax);
-    const std::string at = "effects:\n";
-    text.replace(text.rfind(at), at.size(),
-                 at + "  stabilizer_bar: {T_b: {value: 1.8}, k_b: {value: 0.6}, "
-                      "d_u: {value: 0.165}}\n");
-    std::ofstream(config) << text;
-  }
+  const std::string config = CoaxConfigWithBar(1.8, 0.6, 0.165);
   const std::string log = Path("bar.csv");
   const RunResult sim =
       RunCoaxid("simulate --config=" + config + " --scenario=flight --out=" + log);

@@ -89,7 +89,12 @@ TEST(LinearisePass, TheResidualIsTheFitsOwnWithEveryCandidateAbsent) {
                            &declared_only, &why))
       << why;
   EXPECT_NEAR(pass.linearised.rss, declared_only.rss, 1e-9 * declared_only.rss);
-  EXPECT_EQ(pass.linearised.num_residuals, declared_only.num_residuals);
+  // The stabilizer bar's two states add a continuity tie per segment
+  // boundary (zero at absence: they are carried from segment to segment).
+  ASSERT_TRUE(Has(pass.candidates, "stabilizer_bar"));
+  const int ties = static_cast<int>(fit.segments[0].starts.size()) - 1;
+  EXPECT_EQ(pass.linearised.num_residuals, declared_only.num_residuals + 2 * ties);
+  EXPECT_EQ(pass.linearised.states_per_segment, kNumStates + 2);
 }
 
 }  // namespace

@@ -38,7 +38,7 @@ LinearisedFit Linearise(const Eigen::MatrixXd& J0, const Eigen::MatrixXd& Z,
     names.push_back("c" + std::to_string(c));
     columns.push_back(c);
   }
-  LinearisedFit f(0, names, Eigen::VectorXd::Ones(J.cols()));
+  LinearisedFit f(0, kNumStates, names, Eigen::VectorXd::Ones(J.cols()));
   f.AddNormal(columns, J.transpose() * J);
   for (int first = 0; first < J.rows(); first += cluster) {
     const int rows = std::min<int>(cluster, J.rows() - first);
@@ -209,7 +209,7 @@ TEST(LinearisedFit, BlockEliminationEqualsTheDenseProjection) {
   for (int k = 0; k < R; ++k) y[k] = 0.2 * Z(k, 0) + e(rng);
   const Eigen::VectorXd r = J0 * J0.colPivHouseholderQr().solve(y) - y;
 
-  LinearisedFit f(segments, {"a", "b", "c", "d", "e"}, Eigen::VectorXd::Ones(P));
+  LinearisedFit f(segments, kNumStates, {"a", "b", "c", "d", "e"}, Eigen::VectorXd::Ones(P));
   std::vector<Eigen::VectorXd> cluster_scores;  // reference: Z~_c^T r_c
   const Eigen::MatrixXd Zt = Z - J0 * J0.colPivHouseholderQr().solve(Z);
   for (const Block& b : blocks) {
