@@ -132,9 +132,17 @@ int RunDemo() {
   record.step_seconds.push_back({"compare, in all", SecondsSince(compare_start)});
   summary["compare"] = record.comparison;
 
-  // 6. The closing loop: a simulated log with an effect the config does not
-  // declare, and the measured coaxial test-stand data.
+  // 6. The closing loop: simulated logs with an effect the config does not
+  // declare (a balance log of the GLMAV; a Skybotix CoaX flight with its
+  // stabilizer bar, issue 17), and the measured coaxial test-stand data.
   const std::string real = root + "/data/real/tmotor28-coaxial/";
+  const std::string coax_config = root + "/configs/coax.yaml";
+  {
+    const Scenario coax = LoadScenario(root + "/configs/scenarios/coax_flight.yaml");
+    const Vehicle truth = MakeTruthVehicle(LoadVehicleConfig(coax_config), coax);
+    WriteLog(out + "/logs/coax_flight.csv", SimulateScenario(truth, coax));
+    WriteJson(out + "/logs/coax_flight.truth.json", TruthJson(truth));
+  }
   struct Discovery {
     const char* folder;
     std::vector<std::string> logs;
@@ -146,6 +154,12 @@ int RunDemo() {
        config_path,
        "Simulated balance log with an undeclared wake_interference (truth: k_T = 5e-6, "
        "k_Q = 1e-7)"},
+      {"discover_coax",
+       {out + "/logs/coax_flight.csv"},
+       coax_config,
+       "Simulated Skybotix CoaX flight (configs/scenarios/coax_flight.yaml, 44 s at 150 Hz, "
+       "flight log alone) with a stabilizer bar that configs/coax.yaml lacks (truth: T_b = "
+       "1.8 s, k_b = 0.6, d_u = 0.165 m)"},
       {"discover_tmotor28",
        {real + "tmotor28_coaxial.csv", real + "tmotor28_isolated.csv"},
        root + "/configs/tmotor28.yaml",
