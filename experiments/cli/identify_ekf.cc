@@ -43,7 +43,8 @@ constexpr const char* kUsage =
     "usage: coaxid identify --method=ekf --logs=A.csv[,B.csv] --config=F --out=DIR "
     "[--validate=C.csv] [--holdout_fraction=0.2] [--smoother=true] "
     "[--ekf_scale_anchor=d|none] [--ekf_transition=linearised|sensitivities] "
-    "[--ekf_covariance_pass=true] [--ekf_process_noise=1] [--ekf_process_noise_from_data=true] [--ekf_window_s=1] "
+    "[--ekf_covariance_pass=true] [--ekf_process_noise=1] "
+    "[--ekf_process_noise_from_data=true] [--ekf_window_s=1] "
     "[--ekf_noise_adaptations=1] [--ekf_noise_adaptation_rows=120000] [--ekf_gate=1e-6] [--ekf_initial_report=R.json] "
     "[--prior=R.json[:name,...]]";
 
@@ -397,7 +398,9 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   if (!process_noise_from_data.is_null()) {
     report["ekf"]["process_noise"]["from_data"] = process_noise_from_data;
   }
-  const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, NoiseFromData(estimation).std, &report);
+  // context.noise: the sensor noise from the data (NoiseFromData above).
+  const PlausibilityVerdict plausibility =
+      AddPlausibility(vehicle.parameters, context.noise.std, &report);
   WriteJson(dir + "/report.json", report);
   if (run.print_estimates) PrintEstimates(result);
   PrintPlausibility(plausibility);

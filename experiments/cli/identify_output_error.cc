@@ -294,7 +294,8 @@ nlohmann::json IdentifyOutputError(const IdentifyRun& run) {
       {"outputs", {{"files", files}, {"plots", plots}}}};
   if (!plot_error.empty()) report["outputs"]["plots_skipped"] = plot_error;
   report["validation"]["description"] = split.description;
-  const PlausibilityVerdict plausibility = AddPlausibility(vehicle.parameters, NoiseFromData(split.estimation).std, &report);
+  const PlausibilityVerdict plausibility =
+      AddPlausibility(vehicle.parameters, NoiseFromData(split.estimation).std, &report);
   WriteJson(dir + "/report.json", report);
 
   if (run.print_estimates) PrintEstimates(result);

@@ -29,17 +29,13 @@ ProcessNoiseFromData ProbeProcessNoise(const Vehicle& vehicle,
   probe.smoother = false;
   probe.noise_adaptations = 0;
   probe.progress = nullptr;
-  double scale = 1.0;
-  for (int raise = 0; raise <= max_raises; ++raise, scale *= factor) {
-    probe.state_psd = WithRaisedProcessNoise(options, scale);
-    const EkfResult pass = RunEkf(vehicle, flight, noise, probe);
-    if (pass.usable) {
-      out.found = true;
-      out.scale = scale;
-      break;
-    }
-    out.failures.push_back(pass.failure);
-  }
+  out.found = RunRaisingProcessNoise(
+                  probe, &out,
+                  [&](const EkfOptions& o) { return RunEkf(vehicle, flight, noise, o); }, nullptr,
+                  max_raises, factor)
+                  .usable;
+  const double scale = out.scale * factor;  // the first scale not tried
+  if (!out.found) out.scale = 1.0;
   char text[200];
   if (!out.found) {
     std::snprintf(text, sizeof text,
@@ -67,14 +63,14 @@ ProcessNoiseFromData ProbeProcessNoise(const Vehicle& vehicle,
 EkfResult RunRaisingProcessNoise(const EkfOptions& base, ProcessNoiseFromData* probe,
                                  const std::function<EkfResult(const EkfOptions&)>& run,
                                  const std::function<void(const std::string&)>& say,
-                                 int max_raises) {
+                                 int max_raises, double factor) {
   EkfOptions options = base;
   for (int raise = 0;; ++raise) {
     options.state_psd = WithRaisedProcessNoise(base, probe->scale);
     EkfResult result = run(options);
     if (result.usable || raise >= max_raises) return result;
     probe->failures.push_back(result.failure);
-    probe->scale *= 10;
+    probe->scale *= factor;
     char scale[32];
     std::snprintf(scale, sizeof scale, "%g", probe->scale);
     probe->note = std::string("process noise from the data: velocity and rate PSDs raised to ") +

@@ -44,13 +44,14 @@ ProcessNoiseFromData ProbeProcessNoise(const Vehicle& vehicle,
                                        int max_raises = 6);
 
 // Runs run(options) with the velocity and rate PSDs at probe->scale x
-// base's; after a run that loses the filter, raises the scale tenfold and
-// runs again, at most `max_raises` times (each failure and the new scale go
-// to *probe, each raise to `say`). Returns the last run.
+// base's; after a run that loses the filter, raises the scale by `factor`
+// and runs again, at most `max_raises` times (each failure and the new scale
+// go to *probe, each raise to `say` if given). Returns the last run. The
+// probe and the CLI's runs both go through it.
 EkfResult RunRaisingProcessNoise(const EkfOptions& base, ProcessNoiseFromData* probe,
                                  const std::function<EkfResult(const EkfOptions&)>& run,
                                  const std::function<void(const std::string&)>& say,
-                                 int max_raises = 6);
+                                 int max_raises = 6, double factor = 10.0);
 
 // options' state PSD with the velocity and rate entries times `scale`.
 std::array<double, kNumStates> WithRaisedProcessNoise(const EkfOptions& options, double scale);

@@ -192,13 +192,7 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
     // Segment start states: the model's (an effect's own states, never
     // logged, start at 0 and are estimated like the others).
     const int n = vehicle.model.NumStates();
-    for (int start : seg.starts) {
-      Eigen::VectorXd x = start_state(i, start);
-      const int given = static_cast<int>(x.size());
-      x.conservativeResize(n);
-      if (given < n) x.tail(n - given).setZero();
-      seg.states.push_back(std::move(x));
-    }
+    for (int start : seg.starts) seg.states.push_back(vehicle.model.StateOf(start_state(i, start)));
     const std::vector<int> unobservable = UnobservableStates(log, vehicle.model);
     for (size_t j = 0; j < seg.starts.size(); ++j) {
       double* block = seg.states[j].data();
