@@ -12,18 +12,6 @@ std::vector<std::string> Vehicle::EffectNames() const {
   return names;
 }
 
-void RequireNoEffectStates(const Vehicle& vehicle, const std::string& what) {
-  if (!vehicle.model.HasEffectStates()) return;
-  std::string names;
-  for (const std::string& e : vehicle.EffectNames()) {
-    const int i = EffectIndex(e);
-    if (i >= 0 && EffectLibrary()[i].num_own_states > 0) names += (names.empty() ? "" : ", ") + e;
-  }
-  throw InputError(what + " cannot fit a vehicle whose effects own states (" + names +
-                   "): it does not carry effect states yet (issue 17); identify "
-                   "--method=output_error, discover and simulate do");
-}
-
 Vehicle MakeVehicle(const VehicleConfig& config) {
   Vehicle vehicle;
   vehicle.config = config;

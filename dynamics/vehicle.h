@@ -22,12 +22,6 @@ struct Vehicle {
   std::string ResolvedConfig() const { return ResolvedConfigYaml(config, parameters); }
 };
 
-// Simulations, output-error and discover carry an effect's own states
-// (stabilizer_bar); the EKF and design do not yet and refuse such a vehicle. Throws
-// InputError naming the effect and `what` (the estimator) when the vehicle
-// has effect states.
-void RequireNoEffectStates(const Vehicle& vehicle, const std::string& what);
-
 // Builds the vehicle. Throws InputError on an unknown effect (listing the
 // library), an unknown effect parameter, or an override outside bounds.
 Vehicle MakeVehicle(const VehicleConfig& config);

@@ -30,6 +30,20 @@ VehicleModel::VehicleModel(InterferenceModel interference,
   });
 }
 
+std::string VehicleModel::NameOfState(int index) const {
+  CHECK(index >= 0 && index < NumStates()) << "state " << index << " of " << NumStates();
+  if (index < kNumStates) return StateName(index);
+  for (int i = 0; i < kNumEffects; ++i) {
+    const int first = state_offset_[i];
+    const EffectInfo& effect = EffectLibrary()[i];
+    if (first >= 0 && index < first + effect.num_own_states && index >= first) {
+      return effect.name + "." + effect.own_state_names[index - first];
+    }
+  }
+  LOG(FATAL) << "state " << index << " belongs to no effect";
+  return "";
+}
+
 // The double instantiation is compiled once here; Jet instantiations are made
 // where they are used.
 template AeroLoads<double> VehicleModel::Loads(const double*, const double*, Setting,

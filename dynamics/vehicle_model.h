@@ -10,7 +10,9 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <string>
 #include <type_traits>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -59,6 +61,14 @@ class VehicleModel {
   }
   // Index in the state vector of library effect i's first own state, or -1.
   int EffectStateOffset(int library_index) const { return state_offset_[library_index]; }
+  // The name of state `index`: "x" ... "r" (StateName), then "<effect>.<state>"
+  // ("stabilizer_bar.b_x").
+  std::string NameOfState(int index) const;
+  std::vector<std::string> StateNames() const {
+    std::vector<std::string> names;
+    for (int i = 0; i < NumStates(); ++i) names.push_back(NameOfState(i));
+    return names;
+  }
 
   bool EffectEnabled(int library_index) const { return effect_offset_[library_index] >= 0; }
   int EffectOffset(int library_index) const { return effect_offset_[library_index]; }

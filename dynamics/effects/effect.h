@@ -92,6 +92,8 @@ struct EffectBase {
   static constexpr std::array<int, 4> kInputLag = {-1, -1, -1, -1};
   // States the effect owns (they join the state vector after the 12).
   static constexpr int kNumOwnStates = 0;
+  // Their names, kNumOwnStates of them (reports: "<effect>.<name>").
+  static std::vector<std::string> OwnStateNames() { return {}; }
   template <typename T>
   static void OwnStateDerivative(const T* /*p*/, const T* /*x*/, const T* /*s*/, T* /*sdot*/) {}
   template <typename T>

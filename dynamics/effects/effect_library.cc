@@ -7,7 +7,8 @@ const std::vector<EffectInfo>& EffectLibrary() {
     std::vector<EffectInfo> out;
     ForEachEffectType([&](auto effect, int) {
       using E = decltype(effect);
-      out.push_back({E::kName, E::kDescription, E::Parameters(), E::kNumOwnStates});
+      out.push_back(
+          {E::kName, E::kDescription, E::Parameters(), E::kNumOwnStates, E::OwnStateNames()});
     });
     return out;
   }();

@@ -37,7 +37,16 @@ template <typename F, std::size_t... I>
 void ForEachEffectType(F&& f, std::index_sequence<I...>) {
   (f(std::tuple_element_t<I, EffectTypes>{}, static_cast<int>(I)), ...);
 }
+template <std::size_t... I>
+constexpr int SumOfOwnStates(std::index_sequence<I...>) {
+  return (0 + ... + std::tuple_element_t<I, EffectTypes>::kNumOwnStates);
+}
 }  // namespace internal
+
+// The most states a model can have: the 12 rigid-body states and every
+// library effect's own (fixed-capacity storage for the EKF's state blocks).
+inline constexpr int kMaxModelStates =
+    kNumStates + internal::SumOfOwnStates(std::make_index_sequence<kNumEffects>{});
 
 // Calls f(EffectType{}, index) for every effect in the library, in order.
 template <typename F>
@@ -50,6 +59,7 @@ struct EffectInfo {
   std::string description;
   std::vector<EffectParameterSpec> parameters;
   int num_own_states = 0;  // states it adds after the 12 (stabilizer_bar: 2)
+  std::vector<std::string> own_state_names;  // without the effect's prefix ("b_x", "b_y")
 };
 
 // Name, description and parameters of every effect, in library order.

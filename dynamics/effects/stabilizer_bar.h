@@ -27,6 +27,7 @@ struct StabilizerBarEffect : EffectBase {
       "with T_b) tilts the upper rotor's thrust by k_b, at the upper hub d_u above G (the paper "
       "keeps the rotor planes square to the shaft)";
   static constexpr int kNumOwnStates = 2;
+  static std::vector<std::string> OwnStateNames() { return {"b_x", "b_y"}; }  // rad
   // Typical: the Skybotix CoaX (bar time constant about 1.8 s; linkage 0.61
   // in the public CoaX simulator's parameters; upper hub 0.165 m above G).
   // k_b is linearised at 0.05, beside absence: at k_b = 0 the outputs do not

@@ -145,6 +145,7 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
                      FLAGS_ekf_transition + "'");
   }
   for (double& q : options.state_psd) q *= FLAGS_ekf_process_noise;
+  options.effect_state_psd *= FLAGS_ekf_process_noise;
   if (FLAGS_ekf_noise_adaptations < 0 || FLAGS_ekf_noise_adaptations > 5) {
     throw InputError("--ekf_noise_adaptations must lie in 0 .. 5, got " +
                      std::to_string(FLAGS_ekf_noise_adaptations));
@@ -256,12 +257,12 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
       options, &probe,
       [&](const EkfOptions& o) {
         history = std::make_unique<EkfHistoryFiles>(
-            estimation, o.smoother, fs::temp_directory_path().string(), window_starts);
+            estimation, vehicle.model.StateNames(), o.smoother, fs::temp_directory_path().string(), window_starts);
         return RunEkf(vehicle, estimation, context.noise, o, history.get());
       },
       say, FLAGS_ekf_process_noise_from_data ? 6 : 0);
   const EkfOptions unraised = options;
-  options.state_psd = WithRaisedProcessNoise(unraised, probe.scale);
+  options = WithRaisedProcessNoise(unraised, probe.scale);
   if (FLAGS_ekf_process_noise_from_data) {
     context.notes.push_back(probe.note + ".");
     process_noise_from_data = probe.ToJson();

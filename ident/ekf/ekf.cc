@@ -81,6 +81,9 @@ bool EkfOptions::IsValid(std::string* why) const {
       return fail(std::string("state_psd of ") + StateName(i) + " must be finite and >= 0");
     }
   }
+  if (!(effect_state_psd >= 0 && std::isfinite(effect_state_psd))) {
+    return fail("effect_state_psd must be finite and >= 0");
+  }
   if (!(parameter_psd >= 0 && std::isfinite(parameter_psd))) {
     return fail("parameter_psd must be finite and >= 0");
   }
@@ -94,7 +97,7 @@ bool EkfOptions::IsValid(std::string* why) const {
     if (!(s > 0 && std::isfinite(s))) return fail("initial std of " + name + " must be > 0");
   }
   for (double s : {initial_position_std, initial_velocity_std, initial_angle_std,
-                   initial_rate_std}) {
+                   initial_rate_std, initial_effect_state_std}) {
     if (!(s > 0 && std::isfinite(s))) return fail("initial state std values must be > 0");
   }
   if (!(max_substep_s > 0 && std::isfinite(max_substep_s))) {
@@ -128,7 +131,6 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   const Clock::time_point start = Clock::now();
   std::string why;
   if (!options.IsValid(&why)) throw InputError("EKF options: " + why);
-  RequireNoEffectStates(vehicle, "the EKF");
   if (logs.empty()) throw InputError("EKF: no log to estimate from");
   long rows_per_pass = 0;
   for (const EstimationLog& log : logs) {
@@ -182,7 +184,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   Vehicle anchored = vehicle;
   anchored.parameters = result.parameters;
   EkfProblem problem{anchored, logs, noise, options, free, free.ScaledLower(), free.ScaledUpper(),
-                  Eigen::VectorXd(), Eigen::MatrixXd(), Eigen::Matrix<double, kNumStates, 1>()};
+                  Eigen::VectorXd(), Eigen::MatrixXd(), EkfState()};
   const Eigen::VectorXd p0 = free.ScaledValues();
   for (int k = 0; k < np; ++k) {
     if (!(p0[k] >= problem.lower[k] && p0[k] <= problem.upper[k])) {
@@ -202,7 +204,11 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   }
   problem.prior = prior_std.cwiseAbs2().asDiagonal();
   result.prior_covariance = problem.prior;
-  for (int i = 0; i < kNumStates; ++i) problem.qx[i] = options.state_psd[i];
+  const int nx = vehicle.model.NumStates();
+  problem.qx.resize(nx);
+  for (int i = 0; i < nx; ++i) {
+    problem.qx[i] = i < kNumStates ? options.state_psd[i] : options.effect_state_psd;
+  }
   const long adaptation_rows = options.noise_adaptation_rows > 0
                                   ? std::min(rows_per_pass, options.noise_adaptation_rows)
                                   : rows_per_pass;
@@ -215,7 +221,8 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   // Histories: in result.logs unless the caller takes them.
   std::unique_ptr<EkfMemoryHistory> in_memory;
   if (history == nullptr) {
-    in_memory = std::make_unique<EkfMemoryHistory>(logs, np, options.smoother, covariance_pass,
+    in_memory = std::make_unique<EkfMemoryHistory>(logs, vehicle.model.StateNames(), np,
+                                                   options.smoother, covariance_pass,
                                                    &result.logs);
     history = in_memory.get();
   }

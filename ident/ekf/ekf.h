@@ -115,6 +115,10 @@ struct EkfOptions {
   // logs with model error need larger values (watch the NIS in the report).
   std::array<double, kNumStates> state_psd = {1e-8, 1e-8, 1e-8, 1e-5, 1e-5, 1e-5,
                                               1e-8, 1e-8, 1e-8, 1e-5, 1e-5, 1e-5};
+  // The same for the states an effect owns (the stabilizer bar's tilt, rad^2/s):
+  // 1e-6, a random walk of 1 mrad after 1 s, for a first-order model of a bar
+  // whose real motion is not quite first order.
+  double effect_state_psd = 1e-6;
   // Random walk of the scaled parameters [(scaled unit)^2 / s]: 1e-10 lets a
   // parameter wander by 1e-4 of its scale over 100 s (constant in practice,
   // but never a singular process covariance). Overrides by name.
@@ -130,6 +134,14 @@ struct EkfOptions {
   double initial_velocity_std = 1.0;   // m/s
   double initial_angle_std = 0.5;      // rad
   double initial_rate_std = 1.0;       // rad/s
+  // Initial std of an effect's own states (not logged; their value: 0, at
+  // rest), in their units (the bar's tilt: rad). 0.01: a log that starts in
+  // hover. Larger values let the first rows' accelerometer noise into the
+  // bar's tilt, whose product with the rotor thrust then drags alpha and
+  // beta (measured, CoaX flight, seed 3200, bar known: at 0.05 rad alpha
+  // reached its bound within 0.1 s and the filter lost az at 0.29 s; at 0.01
+  // and 0.002 it ran through).
+  double initial_effect_state_std = 0.01;
 
   EkfTransitionMethod transition = EkfTransitionMethod::kLinearised;
   // Longest interval linearised at once [s]; longer ones are split.
@@ -237,7 +249,10 @@ struct EkfLogHistory {
   std::vector<int> channels;               // FlightChannel of each measured column
   std::vector<std::string> channel_names;
   Eigen::MatrixXd measured;                // rows x channels (NaN missing): the log's values
-  // The reported state estimates (rows x 12), from the last pass (with the
+  // The model's states (VehicleModel::StateNames: "x" ... "r", then any
+  // effect's own, "stabilizer_bar.b_x").
+  std::vector<std::string> state_names;
+  // The reported state estimates (rows x states), from the last pass (with the
   // covariance pass: at the final parameters): filtered, and smoothed (empty
   // without the smoother).
   Eigen::MatrixXd states, state_std;

@@ -19,10 +19,6 @@ EkfStart StartFromEkfPass(const Vehicle& vehicle, const std::vector<EstimationLo
     start.note = "no flight log for an EKF start";
     return start;
   }
-  if (vehicle.model.HasEffectStates()) {
-    start.note = "no EKF start: the EKF does not carry effect states (stabilizer_bar) yet";
-    return start;
-  }
   EkfOptions options;
   options.covariance_pass = false;
   options.smoother = false;

@@ -36,8 +36,9 @@ Eigen::VectorXd PropagatorTheta(const EkfProblem& pb, const Eigen::VectorXd& p_s
 EkfFilter::EkfFilter(const EkfProblem& problem, const Eigen::VectorXd& p_start, bool freeze)
     : pb_(problem),
       freeze_(freeze),
+      nx_(problem.vehicle.model.NumStates()),
       np_(problem.free.size()),
-      n_(kNumStates + problem.free.size()),
+      n_(nx_ + problem.free.size()),
       propagator_(problem.vehicle.model, PropagatorTheta(problem, p_start), problem.free.indices(),
                   problem.free.scales(), problem.qx, problem.qp, problem.options.transition,
                   problem.options.integrator, problem.options.max_substep_s),
@@ -99,7 +100,12 @@ bool EkfFilter::Predict(int L, int k) {
       R_[c] = s * s;
     }
     P_pred_.setZero();
-    for (int i = 0; i < kNumStates; ++i) {
+    for (int i = 0; i < nx_; ++i) {
+      if (i >= kNumStates) {  // an effect's own state: not logged, starts at rest
+        z_pred_[i] = 0;
+        P_pred_(i, i) = options.initial_effect_state_std * options.initial_effect_state_std;
+        continue;
+      }
       const int col = log.ChannelColumn(i);
       if (col >= 0 && std::isfinite(log.values(0, col))) {
         z_pred_[i] = log.values(0, col);
@@ -131,20 +137,20 @@ bool EkfFilter::Predict(int L, int k) {
   const Eigen::MatrixXd& P = s_.P;
   // Predict over the hold interval [t_{k-1}, t_k) with u_{k-1}.
   if (!freeze_) propagator_.SetParameters(z.tail(np_).cwiseProduct(scales), scales);
-  const State x = z.head<kNumStates>();
+  const EkfState x = z.head(nx_);
   if (!propagator_.Propagate(t0, t1, s_.held, x, &transition_)) {
     return Fail(t0, L, k - 1,
                 "propagation to " + Time(t1) + " failed: " + propagator_.last_error());
   }
   const StateMatrix& A = transition_.A;
   const StateByParameter& B = transition_.B;
-  z_pred_.head<kNumStates>() = transition_.x;
+  z_pred_.head(nx_) = transition_.x;
   z_pred_.tail(np_) = z.tail(np_);
   {
     // P <- Phi P Phi^T + Qd with Phi = [[A, B], [0, I]], block by block.
     const int np = np_;
-    const auto Pxx = P.topLeftCorner<kNumStates, kNumStates>();
-    const auto Pxp = P.topRightCorner(kNumStates, np);
+    const auto Pxx = P.topLeftCorner(nx_, nx_);
+    const auto Pxp = P.topRightCorner(nx_, np);
     const auto Ppp = P.bottomRightCorner(np, np);
     StateMatrix M = A * Pxx;
     StateByParameter Nxp = A.lazyProduct(Pxp);
@@ -154,14 +160,14 @@ bool EkfFilter::Predict(int L, int k) {
     }
     StateMatrix Pxx_new = M * A.transpose() + transition_.Qxx;
     if (np > 0) Pxx_new.noalias() += Nxp.lazyProduct(B.transpose());
-    P_pred_.topLeftCorner<kNumStates, kNumStates>() = 0.5 * (Pxx_new + Pxx_new.transpose());
-    P_pred_.topRightCorner(kNumStates, np) = Nxp + transition_.Qxp;
-    P_pred_.bottomLeftCorner(np, kNumStates) = P_pred_.topRightCorner(kNumStates, np).transpose();
+    P_pred_.topLeftCorner(nx_, nx_) = 0.5 * (Pxx_new + Pxx_new.transpose());
+    P_pred_.topRightCorner(nx_, np) = Nxp + transition_.Qxp;
+    P_pred_.bottomLeftCorner(np, nx_) = P_pred_.topRightCorner(nx_, np).transpose();
     P_pred_.bottomRightCorner(np, np) = Ppp;
     P_pred_.bottomRightCorner(np, np).diagonal() += (t1 - t0) * pb_.qp;
   }
-  phi_.topLeftCorner<kNumStates, kNumStates>() = A;
-  phi_.topRightCorner(kNumStates, np_) = B;
+  phi_.topLeftCorner(nx_, nx_) = A;
+  phi_.topRightCorner(nx_, np_) = B;
   return true;
 }
 
@@ -201,7 +207,7 @@ bool EkfFilter::Update(EkfTally* tally) {
   s_.held = NextHeldInput(s_.held, pb_.vehicle.model.InputLags(propagator_.theta().data()),
                           log.inputs.input(k), t1);
   if (!present_.empty()) {
-    const State x_pred = z.head<kNumStates>();
+    const EkfState x_pred = z.head(nx_);
     if (!FlightOutputsAndJacobian(pb_.vehicle.model, propagator_.theta(), pb_.free.indices(),
                                   pb_.free.scales(), x_pred, s_.held, &y_hat_,
                                   need_model ? &H_model_ : nullptr)) {
@@ -282,7 +288,7 @@ bool EkfFilter::Update(EkfTally* tally) {
     const double nis = llt_.matrixL().solve(nu_).squaredNorm();
     nis_ = nis;
     if (freeze_) {
-      z.head<kNumStates>().noalias() += K_.topRows<kNumStates>() * nu_;
+      z.head(nx_).noalias() += K_.topRows(nx_) * nu_;
     } else {
       z.noalias() += K_ * nu_;
     }
@@ -298,7 +304,7 @@ bool EkfFilter::Update(EkfTally* tally) {
     P = 0.5 * (P + P.transpose()).eval();
     if (!freeze_) {
       for (int j = 0; j < np; ++j) {
-        double& v = z[kNumStates + j];
+        double& v = z[nx_ + j];
         if (v < pb_.lower[j] || v > pb_.upper[j]) {
           v = std::clamp(v, pb_.lower[j], pb_.upper[j]);
           if (tally != nullptr) ++tally->clamped;

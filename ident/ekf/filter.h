@@ -37,7 +37,7 @@ struct EkfProblem {
   Eigen::VectorXd lower, upper;  // scaled bounds
   Eigen::VectorXd qp;            // parameter random walk, scaled
   Eigen::MatrixXd prior;         // parameter prior covariance, scaled
-  Eigen::Matrix<double, kNumStates, 1> qx;
+  EkfState qx;  // the model's states' process noise (EkfOptions::state_psd, effect_state_psd)
   long total_rows = 0;  // over every pass, for progress
 };
 
@@ -115,7 +115,7 @@ class EkfFilter {
  private:
   const EkfProblem& pb_;
   const bool freeze_;
-  const int np_, n_;
+  const int nx_, np_, n_;
   EkfPropagator propagator_;
   EkfFilterState s_;
   int row_ = 0;        // the row Predict() moved to

@@ -24,25 +24,24 @@ std::string EkfCsvLogName(const std::string& name) {
   return out;
 }
 
-std::string EkfStatesCsvHeader(bool smoothed) {
+std::string EkfStatesCsvHeader(const std::vector<std::string>& state_names, bool smoothed) {
   std::string out = "log,t";
-  for (int i = 0; i < kNumStates; ++i) {
-    out += std::string(",") + StateName(i) + "," + StateName(i) + "_std";
-  }
+  for (const std::string& name : state_names) out += "," + name + "," + name + "_std";
   if (smoothed) {
-    for (int i = 0; i < kNumStates; ++i) {
-      out += std::string(",") + StateName(i) + "_smoothed," + StateName(i) + "_smoothed_std";
+    for (const std::string& name : state_names) {
+      out += "," + name + "_smoothed," + name + "_smoothed_std";
     }
   }
   return out + "\n";
 }
 
-void AppendEkfStatesCsvRow(const std::string& log, double t, const double* x, const double* std,
-                           const double* smoothed_x, const double* smoothed_std, std::string* out) {
+void AppendEkfStatesCsvRow(const std::string& log, double t, int nx, const double* x,
+                           const double* std, const double* smoothed_x, const double* smoothed_std,
+                           std::string* out) {
   *out += log + "," + Csv(t);
-  for (int i = 0; i < kNumStates; ++i) *out += "," + Csv(x[i]) + "," + Csv(std[i]);
+  for (int i = 0; i < nx; ++i) *out += "," + Csv(x[i]) + "," + Csv(std[i]);
   if (smoothed_x != nullptr) {
-    for (int i = 0; i < kNumStates; ++i) {
+    for (int i = 0; i < nx; ++i) {
       *out += "," + Csv(smoothed_x[i]) + "," + Csv(smoothed_std[i]);
     }
   }

@@ -14,10 +14,12 @@ std::string EkfCsvLogName(const std::string& name);
 
 // states.csv: log, t, then per state its estimate and std (reported pass),
 // and the smoothed estimate and std when smoothed.
-std::string EkfStatesCsvHeader(bool smoothed);
-// x, std: 12 each; smoothed_x, smoothed_std: 12 each, or null (no smoother).
-void AppendEkfStatesCsvRow(const std::string& log, double t, const double* x, const double* std,
-                           const double* smoothed_x, const double* smoothed_std, std::string* out);
+// state_names: the model's (VehicleModel::StateNames).
+std::string EkfStatesCsvHeader(const std::vector<std::string>& state_names, bool smoothed);
+// x, std: nx each; smoothed_x, smoothed_std: nx each, or null (no smoother).
+void AppendEkfStatesCsvRow(const std::string& log, double t, int nx, const double* x,
+                           const double* std, const double* smoothed_x, const double* smoothed_std,
+                           std::string* out);
 
 // parameters.csv: log, t, then per free parameter the recursive estimate, its
 // filter std, and the covariance pass's std at the final estimate.

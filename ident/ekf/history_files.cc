@@ -9,13 +9,13 @@
 #include <utility>
 
 #include "core/errors.h"
+#include "dynamics/effects/effect_library.h"
 #include "ident/ekf/history_csv.h"
 #include "ident/ekf/report.h"
 
 namespace coaxid {
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr int kStateColumns = 2 * kNumStates;  // x, std
 }  // namespace
 
 class EkfHistoryFiles::Scratch {
@@ -75,10 +75,17 @@ class EkfHistoryFiles::Scratch {
   std::FILE* file_ = nullptr;
 };
 
-EkfHistoryFiles::EkfHistoryFiles(const std::vector<EstimationLog>& logs, bool smoother,
+EkfHistoryFiles::EkfHistoryFiles(const std::vector<EstimationLog>& logs,
+                                 const std::vector<std::string>& state_names, bool smoother,
                                  const std::string& folder,
                                  const std::vector<std::vector<int>>& keep_states_at)
-    : logs_(logs), smoother_(smoother), folder_(folder), states_at_rows_(keep_states_at) {
+    : logs_(logs),
+      state_names_(state_names),
+      nx_(static_cast<int>(state_names.size())),
+      state_columns_(2 * nx_),
+      smoother_(smoother),
+      folder_(folder),
+      states_at_rows_(keep_states_at) {
   for (const EstimationLog& log : logs_) {
     offsets_.push_back(rows_);
     rows_ += log.NumRows();
@@ -97,6 +104,7 @@ EkfHistoryFiles::EkfHistoryFiles(const std::vector<EstimationLog>& logs, bool sm
     h.name = log.name;
     h.channels = log.channels;
     h.channel_names = log.channel_names;
+    h.state_names = state_names_;
     for (int row = 0; row < N; row += stride) h.rows.push_back(row);
     if (h.rows.back() != N - 1) h.rows.push_back(N - 1);  // the log's end, for the time axis
     const int n = static_cast<int>(h.rows.size());
@@ -149,10 +157,10 @@ void EkfHistoryFiles::BeginPass(const EkfPassRecord& what) {
 
 void EkfHistoryFiles::FilteredStates(int log, int row, const EkfRowValues& x,
                                      const EkfRowValues& std) {
-  double record[kStateColumns];
-  Eigen::Map<Eigen::VectorXd>(record, kNumStates) = x;
-  Eigen::Map<Eigen::VectorXd>(record + kNumStates, kNumStates) = std;
-  filtered_->Append(record, kStateColumns);
+  double record[2 * kMaxModelStates];
+  Eigen::Map<Eigen::VectorXd>(record, nx_) = x;
+  Eigen::Map<Eigen::VectorXd>(record + nx_, nx_) = std;
+  filtered_->Append(record, state_columns_);
   states_at_rows_.FilteredStates(log, row, x, std);
   const int i = ThinnedIndex(log, row);
   if (i >= 0) {
@@ -169,9 +177,9 @@ void EkfHistoryFiles::SmoothedStates(int log, int row, const EkfRowValues& x,
   if (smoothed_low_ >= 0 && global != smoothed_low_ - 1) FlushSmoothed();
   smoothed_low_ = global;
   const size_t at = smoothed_buffer_.size();
-  smoothed_buffer_.resize(at + kStateColumns);
-  Eigen::Map<Eigen::VectorXd>(smoothed_buffer_.data() + at, kNumStates) = x;
-  Eigen::Map<Eigen::VectorXd>(smoothed_buffer_.data() + at + kNumStates, kNumStates) = std;
+  smoothed_buffer_.resize(at + state_columns_);
+  Eigen::Map<Eigen::VectorXd>(smoothed_buffer_.data() + at, nx_) = x;
+  Eigen::Map<Eigen::VectorXd>(smoothed_buffer_.data() + at + nx_, nx_) = std;
   states_at_rows_.SmoothedStates(log, row, x, std);
   const int i = ThinnedIndex(log, row);
   if (i >= 0) {
@@ -183,13 +191,13 @@ void EkfHistoryFiles::SmoothedStates(int log, int row, const EkfRowValues& x,
 void EkfHistoryFiles::FlushSmoothed() {
   if (smoothed_low_ < 0) return;
   // The buffer holds rows high .. low (last first): reverse the records.
-  const size_t n = smoothed_buffer_.size() / kStateColumns;
+  const size_t n = smoothed_buffer_.size() / state_columns_;
   std::vector<double> forward(smoothed_buffer_.size());
   for (size_t j = 0; j < n; ++j) {
-    std::copy_n(smoothed_buffer_.data() + (n - 1 - j) * kStateColumns, kStateColumns,
-                forward.data() + j * kStateColumns);
+    std::copy_n(smoothed_buffer_.data() + (n - 1 - j) * state_columns_, state_columns_,
+                forward.data() + j * state_columns_);
   }
-  smoothed_->WriteAt(smoothed_low_ * kStateColumns, forward.data(), forward.size());
+  smoothed_->WriteAt(smoothed_low_ * state_columns_, forward.data(), forward.size());
   smoothed_buffer_.clear();
   smoothed_low_ = -1;
 }
@@ -263,16 +271,16 @@ void EkfHistoryFiles::StatesCsv(const EmitText& emit) {
   filtered_->Rewind();
   if (smoother_) smoothed_->Rewind();
   TextPieces pieces(emit);
-  pieces.text = EkfStatesCsvHeader(smoother_);
-  double filtered[kStateColumns], smoothed[kStateColumns];
+  pieces.text = EkfStatesCsvHeader(state_names_, smoother_);
+  double filtered[2 * kMaxModelStates], smoothed[2 * kMaxModelStates];
   for (const EstimationLog& log : logs_) {
     const std::string name = EkfCsvLogName(log.name);
     for (int row = 0; row < log.NumRows(); ++row) {
-      filtered_->Read(filtered, kStateColumns);
-      if (smoother_) smoothed_->Read(smoothed, kStateColumns);
-      AppendEkfStatesCsvRow(name, log.inputs.time(row), filtered, filtered + kNumStates,
+      filtered_->Read(filtered, state_columns_);
+      if (smoother_) smoothed_->Read(smoothed, state_columns_);
+      AppendEkfStatesCsvRow(name, log.inputs.time(row), nx_, filtered, filtered + nx_,
                             smoother_ ? smoothed : nullptr,
-                            smoother_ ? smoothed + kNumStates : nullptr, &pieces.text);
+                            smoother_ ? smoothed + nx_ : nullptr, &pieces.text);
       pieces.EndOfRow();
     }
   }

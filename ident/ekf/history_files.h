@@ -29,12 +29,14 @@ namespace coaxid {
 
 class EkfHistoryFiles : public EkfHistorySink {
  public:
-  // logs: as given to RunEkf (they must outlive this); smoother: whether
-  // RunEkf smooths (EkfOptions::smoother); folder: where the scratch files
-  // go; keep_states_at[L]: rows of log L whose states to keep
-  // (EkfStatesAtRows). Throws InputError if the scratch files cannot be made.
-  EkfHistoryFiles(const std::vector<EstimationLog>& logs, bool smoother, const std::string& folder,
-                  const std::vector<std::vector<int>>& keep_states_at);
+  // logs: as given to RunEkf (they must outlive this); state_names: the
+  // model's (VehicleModel::StateNames); smoother: whether RunEkf smooths
+  // (EkfOptions::smoother); folder: where the scratch files go;
+  // keep_states_at[L]: rows of log L whose states to keep (EkfStatesAtRows).
+  // Throws InputError if the scratch files cannot be made.
+  EkfHistoryFiles(const std::vector<EstimationLog>& logs,
+                  const std::vector<std::string>& state_names, bool smoother,
+                  const std::string& folder, const std::vector<std::vector<int>>& keep_states_at);
   ~EkfHistoryFiles() override;
 
   // The tables (history_csv.h), after a usable RunEkf; the parameters'
@@ -72,6 +74,9 @@ class EkfHistoryFiles : public EkfHistorySink {
   void SizeThinnedParameters(int np);
 
   const std::vector<EstimationLog>& logs_;
+  const std::vector<std::string> state_names_;
+  const int nx_;               // states
+  const int state_columns_;    // a row's record: x and std, 2 nx doubles
   const bool smoother_;
   const std::string folder_;
   int np_ = -1;                // from the first parameter rows

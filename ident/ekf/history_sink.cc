@@ -7,8 +7,10 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 }  // namespace
 
-EkfMemoryHistory::EkfMemoryHistory(const std::vector<EstimationLog>& logs, int np, bool smoother,
-                                   bool covariance_pass, std::vector<EkfLogHistory>* histories)
+EkfMemoryHistory::EkfMemoryHistory(const std::vector<EstimationLog>& logs,
+                                   const std::vector<std::string>& state_names, int np,
+                                   bool smoother, bool covariance_pass,
+                                   std::vector<EkfLogHistory>* histories)
     : logs_(*histories) {
   logs_.resize(logs.size());
   for (size_t L = 0; L < logs.size(); ++L) {
@@ -21,6 +23,7 @@ EkfMemoryHistory::EkfMemoryHistory(const std::vector<EstimationLog>& logs, int n
     h.channels = log.channels;
     h.channel_names = log.channel_names;
     h.measured = log.values;
+    h.state_names = state_names;
     SizeStateAndInnovationRecords(N, m, smoother, &h);
     h.parameters.setConstant(N, np, kNaN);
     h.parameter_std.setConstant(N, np, kNaN);
@@ -29,11 +32,12 @@ EkfMemoryHistory::EkfMemoryHistory(const std::vector<EstimationLog>& logs, int n
 }
 
 void SizeStateAndInnovationRecords(int rows, int m, bool smoother, EkfLogHistory* h) {
-  h->states.setConstant(rows, kNumStates, kNaN);
-  h->state_std.setConstant(rows, kNumStates, kNaN);
+  const int nx = static_cast<int>(h->state_names.size());
+  h->states.setConstant(rows, nx, kNaN);
+  h->state_std.setConstant(rows, nx, kNaN);
   if (smoother) {
-    h->smoothed_states.setConstant(rows, kNumStates, kNaN);
-    h->smoothed_state_std.setConstant(rows, kNumStates, kNaN);
+    h->smoothed_states.setConstant(rows, nx, kNaN);
+    h->smoothed_state_std.setConstant(rows, nx, kNaN);
   }
   h->innovations.setConstant(rows, m, kNaN);
   h->innovation_std.setConstant(rows, m, kNaN);

@@ -36,7 +36,8 @@ class EkfHistorySink {
   // quantity (the noise adaptation passes and the estimation pass): a later
   // pass's values replace the earlier's where it writes.
   virtual void BeginPass(const EkfPassRecord& what) = 0;
-  // The filtered states and their std at a row (12 each), every row in order.
+  // The filtered states and their std at a row (the model's states, the 12
+  // rigid-body ones first), every row in order.
   virtual void FilteredStates(int log, int row, const EkfRowValues& x, const EkfRowValues& std) = 0;
   // The smoothed ones, every row, in reverse blocks.
   virtual void SmoothedStates(int log, int row, const EkfRowValues& x, const EkfRowValues& std) = 0;
@@ -55,8 +56,9 @@ class EkfHistorySink {
       const std::function<void(int log, int row, const EkfRowValues& value)>& visit) = 0;
 };
 
-// Sizes h's per-row state and innovation records for `rows` rows and `m`
-// measured columns (the smoothed states only with `smoother`), all NaN.
+// Sizes h's per-row state and innovation records for `rows` rows, its
+// state_names and `m` measured columns (the smoothed states only with
+// `smoother`), all NaN.
 void SizeStateAndInnovationRecords(int rows, int m, bool smoother, EkfLogHistory* h);
 
 // Stores one row's innovations (EkfHistorySink::Innovations) at `row` of *h.
@@ -66,8 +68,10 @@ void StoreInnovations(int row, const std::vector<int>& columns, const Eigen::Vec
 // Into EkfLogHistory (EkfResult::logs): sized for the logs by the constructor.
 class EkfMemoryHistory : public EkfHistorySink {
  public:
-  // np: free parameters; smoother, covariance_pass: which matrices there are.
-  EkfMemoryHistory(const std::vector<EstimationLog>& logs, int np, bool smoother,
+  // state_names: the model's (VehicleModel::StateNames); np: free
+  // parameters; smoother, covariance_pass: which matrices there are.
+  EkfMemoryHistory(const std::vector<EstimationLog>& logs,
+                   const std::vector<std::string>& state_names, int np, bool smoother,
                    bool covariance_pass, std::vector<EkfLogHistory>* histories);
 
   void BeginPass(const EkfPassRecord&) override {}

@@ -21,7 +21,7 @@ constexpr double kMaxScaledNorm = 0.25;
 void Compose(const StateMatrix& a, const StateByParameter& b, const StateMatrix& qxx,
              const StateByParameter& qxp, const Eigen::VectorXd& qpp_acc, EkfTransition* acc) {
   // Qd first (it needs the old blocks).
-  const StateByParameter AQxp = a.lazyProduct(acc->Qxp);  // 12 x np
+  const StateByParameter AQxp = a.lazyProduct(acc->Qxp);  // nx x np
   StateMatrix Qxx = a * acc->Qxx * a.transpose();
   if (b.cols() > 0) {
     const StateMatrix cross = AQxp.lazyProduct(b.transpose());
@@ -38,8 +38,9 @@ void Compose(const StateMatrix& a, const StateByParameter& b, const StateMatrix&
 }  // namespace
 
 void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
-                         const Eigen::Matrix<double, kNumStates, 1>& qx, const Eigen::VectorXd& qp,
-                         double h, EkfTransition* out) {
+                         const EkfState& qx, const Eigen::VectorXd& qp, double h,
+                         EkfTransition* out) {
+  const int nx = static_cast<int>(F.rows());
   const int np = static_cast<int>(G.cols());
   const double norm = (F * h).cwiseAbs().colwise().sum().maxCoeff();
   int squarings = 0;
@@ -48,7 +49,7 @@ void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
   // exp([[F, G], [0, 0]] hs) = [[exp(X), hs phi1(X) G], [0, I]], X = F hs,
   // phi1(X) = I + X/2! + X^2/3! + ... (Horner, to X^5).
   const StateMatrix X = F * hs;
-  const StateMatrix I = StateMatrix::Identity();
+  const StateMatrix I = StateMatrix::Identity(nx, nx);
   const StateMatrix phi1 = I + X / 2 * (I + X / 3 * (I + X / 4 * (I + X / 5 * (I + X / 6))));
   StateMatrix A = I + X * phi1;
   StateByParameter B = hs * phi1.lazyProduct(G);
@@ -64,7 +65,7 @@ void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
   Qxx += (FQ + FQ.transpose()) * (h2 / 2);
   Qxx += (F2Q + F2Q.transpose() + 2 * FQFt) * (h3 / 6);
   Qxx += (F3Q + F3Q.transpose() + 3 * (F2QFt + F2QFt.transpose())) * (h4 / 24);
-  StateByParameter Qxp(kNumStates, np);
+  StateByParameter Qxp(nx, np);
   if (np > 0) {
     const StateByParameter Gq = G * qp.asDiagonal();
     const StateMatrix M = Gq.lazyProduct(G.transpose());
@@ -94,13 +95,14 @@ const char* EkfTransitionMethodName(EkfTransitionMethod method) {
 
 EkfPropagator::EkfPropagator(const VehicleModel& model, const Eigen::VectorXd& theta,
                              std::vector<int> free_indices, Eigen::VectorXd dtheta_dp,
-                             const Eigen::Matrix<double, kNumStates, 1>& state_psd,
+                             const EkfState& state_psd,
                              Eigen::VectorXd parameter_psd, EkfTransitionMethod method,
                              const IntegratorOptions& integrator, double max_substep_s)
     : model_(model),
       theta_(theta),
       free_indices_(std::move(free_indices)),
       dtheta_dp_(std::move(dtheta_dp)),
+      nx_(model.NumStates()),
       state_psd_(state_psd),
       parameter_psd_(std::move(parameter_psd)),
       method_(method),
@@ -109,16 +111,17 @@ EkfPropagator::EkfPropagator(const VehicleModel& model, const Eigen::VectorXd& t
   CHECK_EQ(static_cast<int>(free_indices_.size()), dtheta_dp_.size());
   CHECK_EQ(dtheta_dp_.size(), parameter_psd_.size());
   CHECK_GT(max_substep_, 0.0);
+  CHECK_EQ(state_psd_.size(), nx_);
   if (method_ == EkfTransitionMethod::kSensitivities) {
     variational_ = std::make_unique<VariationalSystem>(ode_, true, num_parameters() > 0);
     IntegratorOptions options = integrator;
     options.newton = false;  // fixed-point iteration on the augmented system
-    if (!options.sensitivity_error_control) options.error_controlled_states = kNumStates;
+    if (!options.sensitivity_error_control) options.error_controlled_states = nx_;
     integrator_ = std::make_unique<Integrator>(*variational_, options);
     z_.resize(variational_->NumStates());
   } else {
     integrator_ = std::make_unique<Integrator>(ode_, integrator);
-    z_.resize(kNumStates);
+    z_.resize(nx_);
   }
 }
 
@@ -136,9 +139,10 @@ bool EkfPropagator::Fail(const std::string& why) {
   return false;
 }
 
-bool EkfPropagator::MidpointJacobian(const State& x_a, const State& x_b, const HeldInput& u,
-                                     double t_mid, StateMatrix* F, StateByParameter* G) {
-  const State x_mid = 0.5 * (x_a + x_b);
+bool EkfPropagator::MidpointJacobian(const EkfState& x_a, const EkfState& x_b,
+                                     const HeldInput& u, double t_mid, StateMatrix* F,
+                                     StateByParameter* G) {
+  const EkfState x_mid = 0.5 * (x_a + x_b);
   ++counters_.jacobians;
   const int np = num_parameters();
   if (!DerivativeJacobians(model_, theta_, x_mid.data(), u, t_mid, free_indices_, &dfdx_,
@@ -146,27 +150,27 @@ bool EkfPropagator::MidpointJacobian(const State& x_a, const State& x_b, const H
     return Fail("model Jacobian not finite");
   }
   *F = dfdx_;
-  G->resize(kNumStates, np);
+  G->resize(nx_, np);
   if (np > 0) *G = dfdp_ * dtheta_dp_.asDiagonal();
   return true;
 }
 
-bool EkfPropagator::Propagate(double t0, double t1, const HeldInput& u, const State& x0,
+bool EkfPropagator::Propagate(double t0, double t1, const HeldInput& u, const EkfState& x0,
                               EkfTransition* out) {
   CHECK(t1 > t0);
   ++counters_.intervals;
   const int np = num_parameters();
   const int substeps = std::max(1, static_cast<int>(std::ceil((t1 - t0) / max_substep_ - 1e-9)));
   ode_.SetInput(u);
-  out->A.setIdentity();
-  out->B.setZero(kNumStates, np);
-  out->Qxx.setZero();
-  out->Qxp.setZero(kNumStates, np);
+  out->A.setIdentity(nx_, nx_);
+  out->B.setZero(nx_, np);
+  out->Qxx.setZero(nx_, nx_);
+  out->Qxp.setZero(nx_, np);
   Eigen::VectorXd qpp_acc = Eigen::VectorXd::Zero(np);
 
-  State x_a = x0;
-  StateMatrix F;
-  StateByParameter G(kNumStates, np);
+  EkfState x_a = x0;
+  StateMatrix F(nx_, nx_);
+  StateByParameter G(nx_, np);
   EkfTransition step;
   if (method_ == EkfTransitionMethod::kLinearised) {
     z_ = x0;
@@ -177,7 +181,7 @@ bool EkfPropagator::Propagate(double t0, double t1, const HeldInput& u, const St
     const double tb = j + 1 == substeps ? t1 : t0 + (t1 - t0) * (j + 1) / substeps;
     const double h = tb - ta;
     ++counters_.substeps;
-    State x_b;
+    EkfState x_b;
     if (method_ == EkfTransitionMethod::kLinearised) {
       if (!integrator_->AdvanceTo(tb, &z_)) return Fail(integrator_->last_error());
       x_b = z_;
@@ -187,18 +191,17 @@ bool EkfPropagator::Propagate(double t0, double t1, const HeldInput& u, const St
     } else {
       // [x; vec([I | 0])], restarted at every sub-step so that each gives its own Phi_j.
       z_.setZero();
-      z_.head<kNumStates>() = x_a;
-      for (int i = 0; i < kNumStates; ++i) z_[kNumStates + i * kNumStates + i] = 1.0;
+      z_.head(nx_) = x_a;
+      for (int i = 0; i < nx_; ++i) z_[nx_ + i * nx_ + i] = 1.0;
       if (!integrator_->Reset(ta, z_) || !integrator_->AdvanceTo(tb, &z_)) {
         return Fail(integrator_->last_error());
       }
-      x_b = z_.head<kNumStates>();
+      x_b = z_.head(nx_);
       if (!z_.allFinite()) return Fail("state or sensitivities not finite");
       if (!MidpointJacobian(x_a, x_b, u, 0.5 * (ta + tb), &F, &G)) return false;
       ZeroOrderTransition(F, G, state_psd_, parameter_psd_, h, &step);  // for Qd
-      const Eigen::Map<const Eigen::MatrixXd> S(z_.data() + kNumStates, kNumStates,
-                                                kNumStates + np);
-      step.A = S.leftCols<kNumStates>();
+      const Eigen::Map<const Eigen::MatrixXd> S(z_.data() + nx_, nx_, nx_ + np);
+      step.A = S.leftCols(nx_);
       if (np > 0) step.B = S.rightCols(np) * dtheta_dp_.asDiagonal();
     }
     Compose(step.A, step.B, step.Qxx, step.Qxp, qpp_acc, out);
@@ -214,7 +217,7 @@ bool EkfPropagator::Propagate(double t0, double t1, const HeldInput& u, const St
 
 bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& theta,
                               const std::vector<int>& free_indices,
-                              const Eigen::VectorXd& dtheta_dp, const State& x,
+                              const Eigen::VectorXd& dtheta_dp, const EkfState& x,
                               const HeldInput& u,
                               Eigen::Matrix<double, kNumFlightChannels, 1>* y,
                               Eigen::Matrix<double, kNumFlightChannels, Eigen::Dynamic>* H) {
@@ -225,22 +228,24 @@ bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& 
   constexpr int kChunk = 16;
   using Jet = ceres::Jet<double, kChunk>;
   const int np = static_cast<int>(free_indices.size());
-  const int directions = kNumStates + np;
+  const int nx = static_cast<int>(x.size());
+  const int directions = nx + np;
   H->resize(kNumFlightChannels, directions);
   std::vector<Jet> theta_jet(theta.size());
-  Jet x_jet[kNumStates], y_jet[kNumFlightChannels];
+  std::vector<Jet> x_jet(nx);
+  Jet y_jet[kNumFlightChannels];
   for (int first = 0; first < directions; first += kChunk) {
     for (int i = 0; i < theta.size(); ++i) theta_jet[i] = Jet(theta[i]);
-    for (int i = 0; i < kNumStates; ++i) x_jet[i] = Jet(x[i]);
+    for (int i = 0; i < nx; ++i) x_jet[i] = Jet(x[i]);
     const int last = std::min(first + kChunk, directions);
     for (int dir = first; dir < last; ++dir) {
-      if (dir < kNumStates) {
+      if (dir < nx) {
         x_jet[dir].v[dir - first] = 1.0;
       } else {
-        theta_jet[free_indices[dir - kNumStates]].v[dir - first] = dtheta_dp[dir - kNumStates];
+        theta_jet[free_indices[dir - nx]].v[dir - first] = dtheta_dp[dir - nx];
       }
     }
-    FlightOutputsAt(model, theta_jet.data(), x_jet, u, y_jet);
+    FlightOutputsAt(model, theta_jet.data(), x_jet.data(), u, y_jet);
     for (int row = 0; row < kNumFlightChannels; ++row) {
       for (int dir = first; dir < last; ++dir) (*H)(row, dir) = y_jet[row].v[dir - first];
     }

@@ -2,18 +2,19 @@
 // transition of the augmented state and the flight outputs with their
 // Jacobian, all from the one templated model (STYLE.md, items 1 and 3).
 //
-// Augmented state z = [x; p]: the 12 states of dynamics/state.h and the np
-// free parameters in scaled coordinates (p_k = theta_k / scale_k,
+// Augmented state z = [x; p]: the model's states (the 12 of dynamics/state.h,
+// then any effect's own, e.g. the stabilizer bar's tilt) and the np free
+// parameters in scaled coordinates (p_k = theta_k / scale_k,
 // ident/free_parameters.h), modelled as random walks (the paper's eq. 66, here
 // with the nonlinear 6-DoF model):
 //
 //   xdot = f(x, theta(p), u_k) + w_x,   pdot = w_p,
-//   E[w w^T] = Qc delta(t - s),   Qc = diag(q_x (12), q_p (np)).
+//   E[w w^T] = Qc delta(t - s),   Qc = diag(q_x (nx), q_p (np)).
 //
 // Over one hold interval [t0, t1) (input u_k constant, model.md) the mean is
 // integrated with CVODE and the covariance is carried by
 //
-//   Phi = dz(t1)/dz(t0) = [[A, B], [0, I]],  A = dx1/dx0 (12 x 12), B = dx1/dp (12 x np),
+//   Phi = dz(t1)/dz(t0) = [[A, B], [0, I]],  A = dx1/dx0 (nx x nx), B = dx1/dp (nx x np),
 //   Qd  = int_t0^t1 Phi(t1, s) Qc Phi(t1, s)^T ds.
 //
 // Two ways to get Phi (EkfTransitionMethod):
@@ -74,14 +75,19 @@ enum class EkfTransitionMethod { kLinearised, kSensitivities };
 // "linearised" / "sensitivities".
 const char* EkfTransitionMethodName(EkfTransitionMethod method);
 
-using StateMatrix = Eigen::Matrix<double, kNumStates, kNumStates>;
-using StateByParameter = Eigen::Matrix<double, kNumStates, Eigen::Dynamic>;
+// The state blocks have the model's nx = VehicleModel::NumStates() rows, in
+// storage of fixed capacity (kMaxModelStates: no allocation per interval).
+using EkfState = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxModelStates, 1>;
+using StateMatrix =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxModelStates, kMaxModelStates>;
+using StateByParameter =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxModelStates, Eigen::Dynamic>;
 
 // One interval's transition of z = [x; p] (the parameters' mean is constant).
 struct EkfTransition {
-  State x;             // x(t1)
+  EkfState x;          // x(t1)
   StateMatrix A;       // dx(t1)/dx(t0)
-  StateByParameter B;  // dx(t1)/dp (12 x np), p scaled
+  StateByParameter B;  // dx(t1)/dp (nx x np), p scaled
   StateMatrix Qxx;     // blocks of Qd; Qpp = q_p (t1 - t0), diagonal, not stored
   StateByParameter Qxp;
 };
@@ -91,13 +97,14 @@ class EkfPropagator {
   // theta: the full parameter vector (the free entries are overwritten by
   // SetParameters). free_indices: FreeParameters's; dtheta_dp: the initial
   // d theta_k / d p_k.
-  // state_psd (12) and parameter_psd (np): the diagonal of Qc.
+  // state_psd (nx) and parameter_psd (np): the diagonal of Qc.
   EkfPropagator(const VehicleModel& model, const Eigen::VectorXd& theta,
                 std::vector<int> free_indices, Eigen::VectorXd dtheta_dp,
-                const Eigen::Matrix<double, kNumStates, 1>& state_psd,
+                const EkfState& state_psd,
                 Eigen::VectorXd parameter_psd, EkfTransitionMethod method,
                 const IntegratorOptions& integrator, double max_substep_s);
 
+  int num_states() const { return nx_; }
   int num_parameters() const { return static_cast<int>(free_indices_.size()); }
   // The free parameters' values theta_k and d theta_k / d p_k (the filter's
   // coordinates p: scale_k for scaled coordinates, theta_k for logarithmic ones).
@@ -107,7 +114,8 @@ class EkfPropagator {
   // x(t1) and Phi, Qd for the interval [t0, t1) with input u (held, lagged
   // inputs as applied). Returns false (never throws) if CVODE fails or a
   // value stops being finite; then last_error() says why.
-  bool Propagate(double t0, double t1, const HeldInput& u, const State& x0, EkfTransition* out);
+  bool Propagate(double t0, double t1, const HeldInput& u, const EkfState& x0,
+                 EkfTransition* out);
   const std::string& last_error() const { return error_; }
 
   struct Counters {
@@ -128,7 +136,7 @@ class EkfPropagator {
 
  private:
   // F, G at the midpoint of a sub-step (G with respect to the filter's p).
-  bool MidpointJacobian(const State& x_a, const State& x_b, const HeldInput& u, double t_mid,
+  bool MidpointJacobian(const EkfState& x_a, const EkfState& x_b, const HeldInput& u, double t_mid,
                         StateMatrix* F, StateByParameter* G);
   bool Fail(const std::string& why);
 
@@ -136,7 +144,8 @@ class EkfPropagator {
   Eigen::VectorXd theta_;
   std::vector<int> free_indices_;
   Eigen::VectorXd dtheta_dp_;  // d theta_k / d p_k at the current parameters
-  Eigen::Matrix<double, kNumStates, 1> state_psd_;
+  const int nx_;  // the model's states
+  EkfState state_psd_;
   Eigen::VectorXd parameter_psd_;
   EkfTransitionMethod method_;
   double max_substep_;
@@ -155,18 +164,18 @@ class EkfPropagator {
 // over h: A = exp(F h), B = (int_0^h exp(F s) ds) G and the blocks of Qd
 // (series above, with scaling and squaring).
 void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
-                         const Eigen::Matrix<double, kNumStates, 1>& qx, const Eigen::VectorXd& qp,
+                         const EkfState& qx, const Eigen::VectorXd& qp,
                          double h, EkfTransition* out);
 
 // The 15 flight outputs (dynamics/outputs.h) at (x, u at its row's time) and, if H is not
-// null, their Jacobian with respect to z = [x; p] (15 x (12 + np);
+// null, their Jacobian with respect to z = [x; p] (15 x (nx + np);
 // dtheta_dp: d theta_k / d p_k), by autodiff of FlightOutputs. Without a
 // measurement effect (VehicleModel::ChangesFlightMeasurements) the state
 // channels' rows are unit vectors, and the filter uses them as such. Returns
 // false if a value is not finite.
 bool FlightOutputsAndJacobian(const VehicleModel& model, const Eigen::VectorXd& theta,
                               const std::vector<int>& free_indices,
-                              const Eigen::VectorXd& dtheta_dp, const State& x,
+                              const Eigen::VectorXd& dtheta_dp, const EkfState& x,
                               const HeldInput& u,
                               Eigen::Matrix<double, kNumFlightChannels, 1>* y,
                               Eigen::Matrix<double, kNumFlightChannels, Eigen::Dynamic>* H);

@@ -57,7 +57,8 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
   CHECK(!(smooth && max_rows > 0)) << "RunPass: a smoothed pass runs over every row";
   const EkfOptions& options = pb.options;
   const int np = pb.free.size();
-  const int n = kNumStates + np;
+  const int nx = pb.vehicle.model.NumStates();
+  const int n = nx + np;
   const Eigen::VectorXd& scales = pb.free.scales();
   PassResult out;
   out.innovations = rec.innovations;
@@ -108,8 +109,7 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
                              static_cast<int>(filter.updated_columns().size()));
       }
       if (rec.states) {
-        history->FilteredStates(l, row, z.head<kNumStates>(),
-                                P.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt());
+        history->FilteredStates(l, row, z.head(nx), P.diagonal().head(nx).cwiseMax(0.0).cwiseSqrt());
       }
       if (np == 0) return;
       const Eigen::VectorXd p_std =
@@ -246,8 +246,8 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
               P_next = Ps;
             }
             const auto [L, row] = rows[j];
-            history->SmoothedStates(L, row, xs.head<kNumStates>(),
-                                    Ps.diagonal().head<kNumStates>().cwiseMax(0.0).cwiseSqrt());
+            history->SmoothedStates(L, row, xs.head(nx),
+                                    Ps.diagonal().head(nx).cwiseMax(0.0).cwiseSqrt());
           });
     }
     out.smoother_s += Seconds(c0, Clock::now());

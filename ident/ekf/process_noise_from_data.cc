@@ -4,10 +4,11 @@
 
 namespace coaxid {
 
-std::array<double, kNumStates> WithRaisedProcessNoise(const EkfOptions& options, double scale) {
-  std::array<double, kNumStates> psd = options.state_psd;
-  for (int i : {kU, kV, kW, kP, kQ, kR}) psd[i] *= scale;
-  return psd;
+EkfOptions WithRaisedProcessNoise(const EkfOptions& options, double scale) {
+  EkfOptions raised = options;
+  for (int i : {kU, kV, kW, kP, kQ, kR}) raised.state_psd[i] *= scale;
+  raised.effect_state_psd *= scale;
+  return raised;
 }
 
 ProcessNoiseFromData ProbeProcessNoise(const Vehicle& vehicle,
@@ -64,10 +65,8 @@ EkfResult RunRaisingProcessNoise(const EkfOptions& base, ProcessNoiseFromData* p
                                  const std::function<EkfResult(const EkfOptions&)>& run,
                                  const std::function<void(const std::string&)>& say,
                                  int max_raises, double factor) {
-  EkfOptions options = base;
   for (int raise = 0;; ++raise) {
-    options.state_psd = WithRaisedProcessNoise(base, probe->scale);
-    EkfResult result = run(options);
+    EkfResult result = run(WithRaisedProcessNoise(base, probe->scale));
     if (result.usable || raise >= max_raises) return result;
     probe->failures.push_back(result.failure);
     probe->scale *= factor;

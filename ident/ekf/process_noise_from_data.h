@@ -53,7 +53,8 @@ EkfResult RunRaisingProcessNoise(const EkfOptions& base, ProcessNoiseFromData* p
                                  const std::function<void(const std::string&)>& say,
                                  int max_raises = 6, double factor = 10.0);
 
-// options' state PSD with the velocity and rate entries times `scale`.
-std::array<double, kNumStates> WithRaisedProcessNoise(const EkfOptions& options, double scale);
+// options with the process noise of the dynamic rows times `scale`: the
+// velocities', the rates' and the effect states' PSD.
+EkfOptions WithRaisedProcessNoise(const EkfOptions& options, double scale);
 
 }  // namespace coaxid

@@ -45,7 +45,7 @@ std::vector<int> WindowStartRows(const EstimationLog& log, double window_s) {
 Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& log,
                                   const Eigen::MatrixXd& start_states, double window_s,
                                   const IntegratorOptions& integrator, int* failed_windows) {
-  std::vector<State> starts;
+  std::vector<Eigen::VectorXd> starts;
   for (const int row : WindowStartRows(log, window_s)) {
     starts.push_back(start_states.row(row).transpose());
   }
@@ -53,7 +53,7 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
 }
 
 Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& log,
-                                  const std::vector<State>& window_start_states,
+                                  const std::vector<Eigen::VectorXd>& window_start_states,
                                   double window_s, const IntegratorOptions& integrator,
                                   int* failed_windows) {
   const int N = log.NumRows();
@@ -70,7 +70,8 @@ Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& l
     // Window rows [a, b), from the state at row a.
     const int a = starts[w];
     const int b = w + 1 < starts.size() ? starts[w + 1] : N;
-    const Eigen::VectorXd x0 = window_start_states[w];
+    // A start without the model's effect states (a 12-state table): at rest.
+    const Eigen::VectorXd x0 = vehicle.model.StateOf(window_start_states[w]);
     bool ok = x0.allFinite();
     const HeldInput start = path.At(a, lag);
     if (ok && b - 1 > a) {
@@ -183,6 +184,7 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
   ekf["process_noise"] = {
       {"state_psd", psd},
       {"state_psd_units", "(state unit)^2 / s"},
+      {"effect_state_psd", options.effect_state_psd},
       {"parameter_psd_scaled", options.parameter_psd},
       {"parameter_psd_by_name", options.parameter_psd_by_name}};
   ekf["initial_parameter_std_scaled"] = options.initial_parameter_std;
@@ -272,8 +274,11 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
 void EkfStatesCsv(const EkfResult& r, const EmitText& emit) {
   TextPieces pieces(emit);
   const bool smoothed = !r.logs.empty() && r.logs[0].smoothed_states.size() > 0;
-  pieces.text = EkfStatesCsvHeader(smoothed);
-  Eigen::Matrix<double, kNumStates, 4> row;  // x, std, smoothed x, smoothed std
+  const std::vector<std::string> names =
+      r.logs.empty() ? std::vector<std::string>() : r.logs[0].state_names;
+  const int nx = static_cast<int>(names.size());
+  pieces.text = EkfStatesCsvHeader(names, smoothed);
+  Eigen::MatrixXd row(nx, 4);  // x, std, smoothed x, smoothed std
   for (const EkfLogHistory& h : r.logs) {
     const std::string name = EkfCsvLogName(h.name);
     for (size_t k = 0; k < h.times.size(); ++k) {
@@ -283,7 +288,7 @@ void EkfStatesCsv(const EkfResult& r, const EmitText& emit) {
         row.col(2) = h.smoothed_states.row(k).transpose();
         row.col(3) = h.smoothed_state_std.row(k).transpose();
       }
-      AppendEkfStatesCsvRow(name, h.times[k], row.col(0).data(), row.col(1).data(),
+      AppendEkfStatesCsvRow(name, h.times[k], nx, row.col(0).data(), row.col(1).data(),
                             smoothed ? row.col(2).data() : nullptr,
                             smoothed ? row.col(3).data() : nullptr, &pieces.text);
       pieces.EndOfRow();

@@ -43,7 +43,7 @@ std::vector<int> WindowStartRows(const EstimationLog& log, double window_s);
 // The same from the states at the windows' first rows only (one per
 // WindowStartRows entry): a long log's states need not all be kept.
 Eigen::MatrixXd WindowPredictions(const Vehicle& vehicle, const EstimationLog& log,
-                                  const std::vector<State>& window_start_states,
+                                  const std::vector<Eigen::VectorXd>& window_start_states,
                                   double window_s, const IntegratorOptions& integrator,
                                   int* failed_windows);
 

@@ -19,7 +19,7 @@ class EkfStatesAtRows : public EkfHistorySink {
 
   // The reported states at the kept rows of log L, in the order given:
   // smoothed (when the smoother ran) or filtered.
-  std::vector<State> Reported(int log, bool smoothed) const;
+  std::vector<Eigen::VectorXd> Reported(int log, bool smoothed) const;
 
   void BeginPass(const EkfPassRecord&) override {}
   void FilteredStates(int log, int row, const EkfRowValues& x, const EkfRowValues&) override;
@@ -34,7 +34,7 @@ class EkfStatesAtRows : public EkfHistorySink {
  private:
   std::vector<std::vector<int>> rows_;
   // (log, row) -> (filtered, smoothed)
-  std::map<std::pair<int, int>, std::pair<State, State>> kept_;
+  std::map<std::pair<int, int>, std::pair<Eigen::VectorXd, Eigen::VectorXd>> kept_;
 };
 
 }  // namespace coaxid

@@ -634,7 +634,6 @@ PredictedPrecision PredictOutputErrorPrecision(
     const OutputErrorOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("output-error options: " + why);
-  RequireNoEffectStates(declared, "the predicted precision (design)");
   if (logs.empty() || true_states.size() != logs.size()) {
     throw InputError("the predicted precision needs logs and a true state list per log");
   }

@@ -250,21 +250,24 @@ TEST(EkfTest, ScaleDirectionFollowsTheModel) {
   // group with v = theta (they scale with the moments), force-type ones do not.
   Vehicle all = base;
   for (const auto& info : EffectLibrary()) {
-    if (info.num_own_states > 0) continue;  // the EKF does not carry effect states yet
     std::map<std::string, ParameterOverride> overrides;
     for (const auto& spec : info.parameters) overrides[spec.name].value = spec.typical;
     all = WithEffect(all, info.name, overrides);
   }
-  const ScaleDirection with_effects = FindScaleDirection(all.model, all.parameters, samples);
+  // The effects' own states (the bar's tilt) at 0.01, where their loads show.
+  std::vector<ModelSample> all_samples = samples;
+  for (ModelSample& s : all_samples) s.x = all.model.StateOf(s.x, 0.01);
+  const ScaleDirection with_effects = FindScaleDirection(all.model, all.parameters, all_samples);
   ASSERT_TRUE(with_effects.exists) << with_effects.residual;
   auto coefficient = [&](const std::string& name) {
     return with_effects.direction[all.parameters.IndexOrThrow(name)] / all.parameters.Value(name);
   };
   for (const char* name : {"gyroscopic.J_r", "rotor_damping.k_pq", "cg_offset.x_g",
-                           "cg_offset.y_g"}) {
+                           "cg_offset.y_g", "stabilizer_bar.d_u"}) {
     EXPECT_NEAR(coefficient(name), 1.0, 1e-6) << name;
   }
-  for (const char* name : {"swashplate_bias.b_x", "wind.wn", "ground_effect.k_ge"}) {
+  for (const char* name : {"swashplate_bias.b_x", "wind.wn", "ground_effect.k_ge",
+                           "stabilizer_bar.T_b", "stabilizer_bar.k_b"}) {
     EXPECT_EQ(with_effects.direction[all.parameters.IndexOrThrow(name)], 0.0) << name;
   }
 }

@@ -46,7 +46,8 @@ TEST(EkfHistoryFilesTest, WritesWhatTheInMemoryHistoryWrites) {
 
   std::vector<std::vector<int>> keep;
   for (const EstimationLog& log : logs) keep.push_back(WindowStartRows(log, 1.0));
-  EkfHistoryFiles files(logs, options.smoother, testing::TempDir(), keep);
+  EkfHistoryFiles files(logs, vehicle.model.StateNames(), options.smoother, testing::TempDir(),
+                        keep);
   const EkfResult streamed = RunEkf(vehicle, logs, noise, options, &files);
   ASSERT_TRUE(streamed.usable) << streamed.failure;
   EXPECT_TRUE(streamed.logs.empty());
@@ -81,7 +82,7 @@ TEST(EkfHistoryFilesTest, WritesWhatTheInMemoryHistoryWrites) {
       EXPECT_EQ(thin.nis_dof[i], full.nis_dof[row]);
     }
     for (const bool smoothed : {false, true}) {
-      const std::vector<State> states =
+      const std::vector<Eigen::VectorXd> states =
           files.states_at_rows().Reported(static_cast<int>(L), smoothed);
       ASSERT_EQ(states.size(), keep[L].size());
       for (size_t w = 0; w < keep[L].size(); ++w) {
