@@ -361,6 +361,7 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
   for (size_t i = 0; i < out->added.size(); ++i) {
     const std::string& effect = out->added[i];
     const bool itself = i + 1 == out->added.size();
+    const auto t0 = Clock::now();
     const Vehicle without = WithoutEffect(pass->fitted, effect);
     const OutputErrorResult fit = WarmRefit(without, estimation, o.fit, pass->fit.noise);
     if (!fit.usable) continue;  // keep it: nothing to judge against
@@ -380,7 +381,8 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
                            : ShareOfExcessRemoved(snapshot.validation, now->validation,
                                                   snapshot.validation_residual_tests, channels)
                                  .share;
-    Say(o, "  without " + effect + ", warm from the current fit: it removes " +
+    Say(o, "  without " + effect + ", warm from the current fit (" +
+               NumberText(SecondsSince(t0), "%.1f s") + "): it removes " +
                ShareText(r.share_of_excess, r.share_of_excess_held_out) +
                (itself ? std::string() : " in the model with " + latest));
     const bool material =

@@ -31,6 +31,34 @@ Eigen::VectorXd PropagatorTheta(const EkfProblem& pb, const Eigen::VectorXd& p_s
   return theta;
 }
 
+// P <- Phi P Phi^T + Qd with Phi = [[A, B], [0, I]], block by block, over
+// an interval dt (qp: the parameters' random walk). N as in TransitionBlocks
+// (fixed-size arithmetic for the 12 states).
+template <int N>
+void PredictCovariance(const EkfTransition& t, const Eigen::MatrixXd& P, int nx, int np,
+                       double dt, const Eigen::VectorXd& qp, Eigen::MatrixXd* P_pred) {
+  using Blocks = TransitionBlocks<N>;
+  const typename Blocks::Square A = t.A;
+  const typename Blocks::ByParameter B = t.B;
+  const Eigen::Block<const Eigen::MatrixXd, N, N> Pxx(P, 0, 0, nx, nx);
+  const Eigen::Block<const Eigen::MatrixXd, N, Eigen::Dynamic> Pxp(P, 0, nx, nx, np);
+  const auto Ppp = P.bottomRightCorner(np, np);
+  typename Blocks::Square M = A * Pxx;
+  typename Blocks::ByParameter Nxp = A.lazyProduct(Pxp);
+  if (np > 0) {
+    M.noalias() += B.lazyProduct(Pxp.transpose());
+    Nxp.noalias() += B.lazyProduct(Ppp);
+  }
+  typename Blocks::Square Pxx_new = M * A.transpose() + t.Qxx;
+  if (np > 0) Pxx_new.noalias() += Nxp.lazyProduct(B.transpose());
+  Eigen::Block<Eigen::MatrixXd, N, N>(*P_pred, 0, 0, nx, nx) =
+      0.5 * (Pxx_new + Pxx_new.transpose());
+  P_pred->topRightCorner(nx, np) = Nxp + t.Qxp;
+  P_pred->bottomLeftCorner(np, nx) = P_pred->topRightCorner(nx, np).transpose();
+  P_pred->bottomRightCorner(np, np) = Ppp;
+  P_pred->bottomRightCorner(np, np).diagonal() += dt * qp;
+}
+
 }  // namespace
 
 EkfFilter::EkfFilter(const EkfProblem& problem, const Eigen::VectorXd& p_start, bool freeze)
@@ -142,32 +170,15 @@ bool EkfFilter::Predict(int L, int k) {
     return Fail(t0, L, k - 1,
                 "propagation to " + Time(t1) + " failed: " + propagator_.last_error());
   }
-  const StateMatrix& A = transition_.A;
-  const StateByParameter& B = transition_.B;
   z_pred_.head(nx_) = transition_.x;
   z_pred_.tail(np_) = z.tail(np_);
-  {
-    // P <- Phi P Phi^T + Qd with Phi = [[A, B], [0, I]], block by block.
-    const int np = np_;
-    const auto Pxx = P.topLeftCorner(nx_, nx_);
-    const auto Pxp = P.topRightCorner(nx_, np);
-    const auto Ppp = P.bottomRightCorner(np, np);
-    StateMatrix M = A * Pxx;
-    StateByParameter Nxp = A.lazyProduct(Pxp);
-    if (np > 0) {
-      M.noalias() += B.lazyProduct(Pxp.transpose());
-      Nxp.noalias() += B.lazyProduct(Ppp);
-    }
-    StateMatrix Pxx_new = M * A.transpose() + transition_.Qxx;
-    if (np > 0) Pxx_new.noalias() += Nxp.lazyProduct(B.transpose());
-    P_pred_.topLeftCorner(nx_, nx_) = 0.5 * (Pxx_new + Pxx_new.transpose());
-    P_pred_.topRightCorner(nx_, np) = Nxp + transition_.Qxp;
-    P_pred_.bottomLeftCorner(np, nx_) = P_pred_.topRightCorner(nx_, np).transpose();
-    P_pred_.bottomRightCorner(np, np) = Ppp;
-    P_pred_.bottomRightCorner(np, np).diagonal() += (t1 - t0) * pb_.qp;
+  if (nx_ == kNumStates) {
+    PredictCovariance<kNumStates>(transition_, P, nx_, np_, t1 - t0, pb_.qp, &P_pred_);
+  } else {
+    PredictCovariance<Eigen::Dynamic>(transition_, P, nx_, np_, t1 - t0, pb_.qp, &P_pred_);
   }
-  phi_.topLeftCorner(nx_, nx_) = A;
-  phi_.topRightCorner(nx_, np_) = B;
+  phi_.topLeftCorner(nx_, nx_) = transition_.A;
+  phi_.topRightCorner(nx_, np_) = transition_.B;
   return true;
 }
 

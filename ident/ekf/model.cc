@@ -18,13 +18,19 @@ constexpr double kMaxScaledNorm = 0.25;
 // Composes the accumulated transition (A, B, Qxx, Qxp) with one more sub-step
 // (a, b, qxx, qxp): Phi <- Phi_j Phi, Qd <- Phi_j Qd Phi_j^T + Qd_j, where the
 // accumulated Qpp (diagonal, qpp_acc) is needed for the cross terms.
-void Compose(const StateMatrix& a, const StateByParameter& b, const StateMatrix& qxx,
-             const StateByParameter& qxp, const Eigen::VectorXd& qpp_acc, EkfTransition* acc) {
+template <int N>
+void Compose(const typename TransitionBlocks<N>::Square& a,
+             const typename TransitionBlocks<N>::ByParameter& b,
+             const typename TransitionBlocks<N>::Square& qxx,
+             const typename TransitionBlocks<N>::ByParameter& qxp, const Eigen::VectorXd& qpp_acc,
+             TransitionBlocks<N>* acc) {
+  using Square = typename TransitionBlocks<N>::Square;
+  using ByParameter = typename TransitionBlocks<N>::ByParameter;
   // Qd first (it needs the old blocks).
-  const StateByParameter AQxp = a.lazyProduct(acc->Qxp);  // nx x np
-  StateMatrix Qxx = a * acc->Qxx * a.transpose();
+  const ByParameter AQxp = a.lazyProduct(acc->Qxp);  // nx x np
+  Square Qxx = a * acc->Qxx * a.transpose();
   if (b.cols() > 0) {
-    const StateMatrix cross = AQxp.lazyProduct(b.transpose());
+    const Square cross = AQxp.lazyProduct(b.transpose());
     Qxx += cross + cross.transpose();
     Qxx.noalias() += (b * qpp_acc.asDiagonal()).lazyProduct(b.transpose());
   }
@@ -37,9 +43,13 @@ void Compose(const StateMatrix& a, const StateByParameter& b, const StateMatrix&
 
 }  // namespace
 
-void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
-                         const EkfState& qx, const Eigen::VectorXd& qp, double h,
-                         EkfTransition* out) {
+template <int N>
+void ZeroOrderTransition(const typename TransitionBlocks<N>::Square& F,
+                         const typename TransitionBlocks<N>::ByParameter& G,
+                         const typename TransitionBlocks<N>::Vector& qx, const Eigen::VectorXd& qp,
+                         double h, TransitionBlocks<N>* out) {
+  using StateMatrix = typename TransitionBlocks<N>::Square;
+  using StateByParameter = typename TransitionBlocks<N>::ByParameter;
   const int nx = static_cast<int>(F.rows());
   const int np = static_cast<int>(G.cols());
   const double norm = (F * h).cwiseAbs().colwise().sum().maxCoeff();
@@ -83,11 +93,19 @@ void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
   // Squaring: the transition over 2 hs is this one twice.
   Eigen::VectorXd qpp = hs * qp;
   for (int s = 0; s < squarings; ++s) {
-    const EkfTransition half = *out;
-    Compose(half.A, half.B, half.Qxx, half.Qxp, qpp, out);
+    const TransitionBlocks<N> half = *out;
+    Compose<N>(half.A, half.B, half.Qxx, half.Qxp, qpp, out);
     qpp *= 2;
   }
 }
+template void ZeroOrderTransition<kNumStates>(const TransitionBlocks<kNumStates>::Square&,
+                                              const TransitionBlocks<kNumStates>::ByParameter&,
+                                              const TransitionBlocks<kNumStates>::Vector&,
+                                              const Eigen::VectorXd&, double,
+                                              TransitionBlocks<kNumStates>*);
+template void ZeroOrderTransition<Eigen::Dynamic>(const StateMatrix&, const StateByParameter&,
+                                                  const EkfState&, const Eigen::VectorXd&, double,
+                                                  EkfTransition*);
 
 const char* EkfTransitionMethodName(EkfTransitionMethod method) {
   return method == EkfTransitionMethod::kLinearised ? "linearised" : "sensitivities";
@@ -139,10 +157,10 @@ bool EkfPropagator::Fail(const std::string& why) {
   return false;
 }
 
-bool EkfPropagator::MidpointJacobian(const EkfState& x_a, const EkfState& x_b,
-                                     const HeldInput& u, double t_mid, StateMatrix* F,
-                                     StateByParameter* G) {
-  const EkfState x_mid = 0.5 * (x_a + x_b);
+template <typename Vector, typename Square, typename ByParameter>
+bool EkfPropagator::MidpointJacobian(const Vector& x_a, const Vector& x_b, const HeldInput& u,
+                                     double t_mid, Square* F, ByParameter* G) {
+  const Vector x_mid = 0.5 * (x_a + x_b);
   ++counters_.jacobians;
   const int np = num_parameters();
   if (!DerivativeJacobians(model_, theta_, x_mid.data(), u, t_mid, free_indices_, &dfdx_,
@@ -157,7 +175,21 @@ bool EkfPropagator::MidpointJacobian(const EkfState& x_a, const EkfState& x_b,
 
 bool EkfPropagator::Propagate(double t0, double t1, const HeldInput& u, const EkfState& x0,
                               EkfTransition* out) {
+  return nx_ == kNumStates ? PropagateBlocks<kNumStates>(t0, t1, u, x0, out)
+                           : PropagateBlocks<Eigen::Dynamic>(t0, t1, u, x0, out);
+}
+
+template <int N>
+bool EkfPropagator::PropagateBlocks(double t0, double t1, const HeldInput& u,
+                                    const EkfState& x0_in, EkfTransition* result) {
+  using Blocks = TransitionBlocks<N>;
   CHECK(t1 > t0);
+  // Fixed-size arithmetic for the 12 states (a copy in and out), the same
+  // equations otherwise.
+  Blocks fixed;
+  Blocks* out = &fixed;
+  const typename Blocks::Vector x0 = x0_in;
+  const typename Blocks::Vector state_psd = state_psd_;
   ++counters_.intervals;
   const int np = num_parameters();
   const int substeps = std::max(1, static_cast<int>(std::ceil((t1 - t0) / max_substep_ - 1e-9)));
@@ -168,10 +200,10 @@ bool EkfPropagator::Propagate(double t0, double t1, const HeldInput& u, const Ek
   out->Qxp.setZero(nx_, np);
   Eigen::VectorXd qpp_acc = Eigen::VectorXd::Zero(np);
 
-  EkfState x_a = x0;
-  StateMatrix F(nx_, nx_);
-  StateByParameter G(nx_, np);
-  EkfTransition step;
+  typename Blocks::Vector x_a = x0;
+  typename Blocks::Square F(nx_, nx_);
+  typename Blocks::ByParameter G(nx_, np);
+  Blocks step;
   if (method_ == EkfTransitionMethod::kLinearised) {
     z_ = x0;
     if (!integrator_->Reset(t0, z_)) return Fail(integrator_->last_error());
@@ -181,13 +213,13 @@ bool EkfPropagator::Propagate(double t0, double t1, const HeldInput& u, const Ek
     const double tb = j + 1 == substeps ? t1 : t0 + (t1 - t0) * (j + 1) / substeps;
     const double h = tb - ta;
     ++counters_.substeps;
-    EkfState x_b;
+    typename Blocks::Vector x_b;
     if (method_ == EkfTransitionMethod::kLinearised) {
       if (!integrator_->AdvanceTo(tb, &z_)) return Fail(integrator_->last_error());
       x_b = z_;
       if (!x_b.allFinite()) return Fail("state not finite");
       if (!MidpointJacobian(x_a, x_b, u, 0.5 * (ta + tb), &F, &G)) return false;
-      ZeroOrderTransition(F, G, state_psd_, parameter_psd_, h, &step);
+      ZeroOrderTransition<N>(F, G, state_psd, parameter_psd_, h, &step);
     } else {
       // [x; vec([I | 0])], restarted at every sub-step so that each gives its own Phi_j.
       z_.setZero();
@@ -199,12 +231,12 @@ bool EkfPropagator::Propagate(double t0, double t1, const HeldInput& u, const Ek
       x_b = z_.head(nx_);
       if (!z_.allFinite()) return Fail("state or sensitivities not finite");
       if (!MidpointJacobian(x_a, x_b, u, 0.5 * (ta + tb), &F, &G)) return false;
-      ZeroOrderTransition(F, G, state_psd_, parameter_psd_, h, &step);  // for Qd
+      ZeroOrderTransition<N>(F, G, state_psd, parameter_psd_, h, &step);  // for Qd
       const Eigen::Map<const Eigen::MatrixXd> S(z_.data() + nx_, nx_, nx_ + np);
       step.A = S.leftCols(nx_);
       if (np > 0) step.B = S.rightCols(np) * dtheta_dp_.asDiagonal();
     }
-    Compose(step.A, step.B, step.Qxx, step.Qxp, qpp_acc, out);
+    Compose<N>(step.A, step.B, step.Qxx, step.Qxp, qpp_acc, out);
     qpp_acc += h * parameter_psd_;
     x_a = x_b;
   }
@@ -212,6 +244,11 @@ bool EkfPropagator::Propagate(double t0, double t1, const HeldInput& u, const Ek
   if (!out->A.allFinite() || !out->B.allFinite() || !out->Qxx.allFinite()) {
     return Fail("state transition matrix not finite");
   }
+  result->x = out->x;
+  result->A = out->A;
+  result->B = out->B;
+  result->Qxx = out->Qxx;
+  result->Qxp = out->Qxp;
   return true;
 }
 

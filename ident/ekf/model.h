@@ -75,22 +75,27 @@ enum class EkfTransitionMethod { kLinearised, kSensitivities };
 // "linearised" / "sensitivities".
 const char* EkfTransitionMethodName(EkfTransitionMethod method);
 
-// The state blocks have the model's nx = VehicleModel::NumStates() rows, in
-// storage of fixed capacity (kMaxModelStates: no allocation per interval).
-using EkfState = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxModelStates, 1>;
-using StateMatrix =
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxModelStates, kMaxModelStates>;
-using StateByParameter =
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxModelStates, Eigen::Dynamic>;
-
-// One interval's transition of z = [x; p] (the parameters' mean is constant).
-struct EkfTransition {
-  EkfState x;          // x(t1)
-  StateMatrix A;       // dx(t1)/dx(t0)
-  StateByParameter B;  // dx(t1)/dp (nx x np), p scaled
-  StateMatrix Qxx;     // blocks of Qd; Qpp = q_p (t1 - t0), diagonal, not stored
-  StateByParameter Qxp;
+// The blocks of one interval's transition of z = [x; p] (the parameters'
+// mean is constant), for N states: kNumStates (a model without effect
+// states: fixed-size arithmetic) or Eigen::Dynamic (the model's NumStates(),
+// in storage of fixed capacity kMaxModelStates: no allocation per interval).
+// The equations are written once, templated on N.
+template <int N>
+struct TransitionBlocks {
+  static constexpr int kCapacity = N == Eigen::Dynamic ? kMaxModelStates : N;
+  using Vector = Eigen::Matrix<double, N, 1, 0, kCapacity, 1>;
+  using Square = Eigen::Matrix<double, N, N, 0, kCapacity, kCapacity>;
+  using ByParameter = Eigen::Matrix<double, N, Eigen::Dynamic, 0, kCapacity, Eigen::Dynamic>;
+  Vector x;        // x(t1)
+  Square A;        // dx(t1)/dx(t0)
+  ByParameter B;   // dx(t1)/dp (nx x np), p scaled
+  Square Qxx;      // blocks of Qd; Qpp = q_p (t1 - t0), diagonal, not stored
+  ByParameter Qxp;
 };
+using EkfTransition = TransitionBlocks<Eigen::Dynamic>;
+using EkfState = EkfTransition::Vector;
+using StateMatrix = EkfTransition::Square;
+using StateByParameter = EkfTransition::ByParameter;
 
 class EkfPropagator {
  public:
@@ -135,9 +140,14 @@ class EkfPropagator {
   void RestoreStepHint(double hint) { integrator_->RestoreStepHint(hint); }
 
  private:
+  // Propagate() with N = kNumStates or Eigen::Dynamic (TransitionBlocks).
+  template <int N>
+  bool PropagateBlocks(double t0, double t1, const HeldInput& u, const EkfState& x0,
+                       EkfTransition* out);
   // F, G at the midpoint of a sub-step (G with respect to the filter's p).
-  bool MidpointJacobian(const EkfState& x_a, const EkfState& x_b, const HeldInput& u, double t_mid,
-                        StateMatrix* F, StateByParameter* G);
+  template <typename Vector, typename Square, typename ByParameter>
+  bool MidpointJacobian(const Vector& x_a, const Vector& x_b, const HeldInput& u, double t_mid,
+                        Square* F, ByParameter* G);
   bool Fail(const std::string& why);
 
   const VehicleModel& model_;
@@ -163,9 +173,16 @@ class EkfPropagator {
 //   d/dt [x; p] = [[F, G], [0, 0]] [x; p] + w,  E[w w^T] = diag(qx, qp) delta,
 // over h: A = exp(F h), B = (int_0^h exp(F s) ds) G and the blocks of Qd
 // (series above, with scaling and squaring).
-void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
-                         const EkfState& qx, const Eigen::VectorXd& qp,
-                         double h, EkfTransition* out);
+template <int N>
+void ZeroOrderTransition(const typename TransitionBlocks<N>::Square& F,
+                         const typename TransitionBlocks<N>::ByParameter& G,
+                         const typename TransitionBlocks<N>::Vector& qx, const Eigen::VectorXd& qp,
+                         double h, TransitionBlocks<N>* out);
+inline void ZeroOrderTransition(const StateMatrix& F, const StateByParameter& G,
+                                const EkfState& qx, const Eigen::VectorXd& qp, double h,
+                                EkfTransition* out) {
+  ZeroOrderTransition<Eigen::Dynamic>(F, G, qx, qp, h, out);
+}
 
 // The 15 flight outputs (dynamics/outputs.h) at (x, u at its row's time) and, if H is not
 // null, their Jacobian with respect to z = [x; p] (15 x (nx + np);
