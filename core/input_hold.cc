@@ -36,6 +36,18 @@ InputHold::InputHold(std::vector<double> times, std::vector<InputVector> inputs)
   }
 }
 
+void InputHold::SetLeadIn(std::vector<double> times, std::vector<InputVector> inputs) {
+  if (times.size() != inputs.size()) throw InputError("input hold: lead-in sizes differ");
+  for (size_t k = 0; k < times.size(); ++k) {
+    const double next = k + 1 < times.size() ? times[k + 1] : times_.front();
+    if (!(times[k] < next)) {
+      throw InputError("input hold: the lead-in's times must increase to before the first row");
+    }
+  }
+  lead_in_times_ = std::move(times);
+  lead_in_inputs_ = std::move(inputs);
+}
+
 InputHold InputHold::FromLog(const Log& log) {
   const std::string source = log.source.empty() ? "<log>" : log.source;
   // A log that ReadLog accepted has these; one built in memory might not.

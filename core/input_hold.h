@@ -33,9 +33,20 @@ class InputHold {
   // The held input at time t.
   const InputVector& At(double t) const { return inputs_[IntervalAt(t)]; }
 
+  // A hold cut from a longer log (a held-out tail): the source's rows just
+  // before the first one (times strictly before time(0), increasing). They
+  // only say where a lagged input stands at the first row
+  // (dynamics/held_input.h: FirstHeldInput); every other use of the hold
+  // ignores them. Throws InputError if they are not before time(0).
+  void SetLeadIn(std::vector<double> times, std::vector<InputVector> inputs);
+  const std::vector<double>& lead_in_times() const { return lead_in_times_; }
+  const std::vector<InputVector>& lead_in_inputs() const { return lead_in_inputs_; }
+
  private:
   std::vector<double> times_;
   std::vector<InputVector> inputs_;
+  std::vector<double> lead_in_times_;
+  std::vector<InputVector> lead_in_inputs_;
 };
 
 }  // namespace coaxid

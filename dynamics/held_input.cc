@@ -35,9 +35,18 @@ bool AnyLag(const InputVector& lag) {
 }
 }  // namespace
 
+HeldInput FirstHeldInput(const InputHold& hold, const InputVector& lag) {
+  const std::vector<double>& t = hold.lead_in_times();
+  if (!AnyLag(lag) || t.empty()) return HeldInput::Steady(hold.input(0), hold.time(0));
+  const std::vector<InputVector>& u = hold.lead_in_inputs();
+  HeldInput held = HeldInput::Steady(u[0], t[0]);
+  for (size_t j = 1; j < t.size(); ++j) held = NextHeldInput(held, lag, u[j], t[j]);
+  return NextHeldInput(held, lag, hold.input(0), hold.time(0));
+}
+
 HeldInput HeldInputAt(const InputHold& hold, int k, const InputVector& lag) {
   if (!AnyLag(lag)) return HeldInput::Steady(hold.input(k), hold.time(k));
-  HeldInput held = HeldInput::Steady(hold.input(0), hold.time(0));
+  HeldInput held = FirstHeldInput(hold, lag);
   for (int j = 1; j <= k; ++j) held = NextHeldInput(held, lag, hold.input(j), hold.time(j));
   return held;
 }
@@ -57,8 +66,9 @@ std::vector<HeldInput> HeldInputs(const InputHold& hold, const InputVector& lag)
   out.reserve(hold.size());
   const bool any = AnyLag(lag);
   for (int k = 0; k < hold.size(); ++k) {
-    out.push_back(k == 0 || !any ? HeldInput::Steady(hold.input(k), hold.time(k))
-                                 : NextHeldInput(out.back(), lag, hold.input(k), hold.time(k)));
+    out.push_back(!any  ? HeldInput::Steady(hold.input(k), hold.time(k))
+                  : k == 0 ? FirstHeldInput(hold, lag)
+                           : NextHeldInput(out.back(), lag, hold.input(k), hold.time(k)));
   }
   return out;
 }

@@ -57,6 +57,13 @@ T LaggedInput(const HeldInput& held, int i, const T& time_constant, double t) {
 HeldInput NextHeldInput(const HeldInput& held, const InputVector& lag, const InputVector& u,
                         double t1);
 
+// Row 0 of a log as applied: the logged row when no input lags or the log
+// starts with its first row; for a log cut from a longer one (a held-out
+// tail), the lag walked through the source's rows before it
+// (InputHold::lead_in): a rotor that lags its command by 0.19 s is not at
+// its command when the tail starts (measured, CoaX flight: taken as
+// settled, the EKF's held-out restart lost r within 0.25 s on every seed).
+HeldInput FirstHeldInput(const InputHold& hold, const InputVector& lag);
 // Row k of a log as applied, walking the lag from row 0 (O(k); O(1) when no
 // input lags). lag: VehicleModel::InputLags.
 HeldInput HeldInputAt(const InputHold& hold, int k, const InputVector& lag);

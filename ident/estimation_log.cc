@@ -35,6 +35,15 @@ EstimationLog MakeEstimationLog(const Log& log, int begin_row, int end_row) {
   std::vector<InputVector> u;
   for (int k = begin_row; k < end_row; ++k) u.push_back(all.input(k));
   out.inputs = InputHold(std::move(t), std::move(u));
+  // Where a lagged input stands at the first row: the source's rows of the
+  // kLeadInSeconds before it (dynamics/held_input.h, FirstHeldInput).
+  int first = begin_row;
+  while (first > 0 && all.time(first - 1) >= all.time(begin_row) - kLeadInSeconds) --first;
+  std::vector<InputVector> lead_in;
+  for (int k = first; k < begin_row; ++k) lead_in.push_back(all.input(k));
+  out.inputs.SetLeadIn(
+      std::vector<double>(all.times().begin() + first, all.times().begin() + begin_row),
+      std::move(lead_in));
 
   const bool flight = log.kind == LogKind::kFlight;
   const int num = flight ? kNumFlightChannels : kNumBalanceChannels;
@@ -81,6 +90,7 @@ EstimationLog FirstSecondsOf(const EstimationLog& log, double seconds) {
   std::vector<InputVector> inputs;
   for (int k = 0; k < rows; ++k) inputs.push_back(log.inputs.input(k));
   part.inputs = InputHold(std::vector<double>(t.begin(), t.begin() + rows), std::move(inputs));
+  part.inputs.SetLeadIn(log.inputs.lead_in_times(), log.inputs.lead_in_inputs());
   part.values = log.values.topRows(rows);
   return part;
 }

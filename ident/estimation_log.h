@@ -31,9 +31,16 @@ struct EstimationLog {
   int ChannelColumn(int channel) const;
 };
 
+// How far back a log cut from a longer one keeps the source's inputs, for
+// where lagged inputs stand at its first row: 10 s, ten time constants of
+// the slowest lag the library's bounds allow (motor_lag, 1 s; e^-10 = 5e-5).
+inline constexpr double kLeadInSeconds = 10.0;
+
 // Rows [begin_row, end_row) of a log (end_row < 0: to the end). A channel is
-// kept if its column exists and holds at least one finite value. Throws
-// InputError if the range is empty or the log has no output channel.
+// kept if its column exists and holds at least one finite value; the
+// source's inputs of the kLeadInSeconds before begin_row are the inputs'
+// lead-in (InputHold::SetLeadIn). Throws InputError if the range is empty or
+// the log has no output channel.
 EstimationLog MakeEstimationLog(const Log& log, int begin_row = 0, int end_row = -1);
 
 // Where the held-out final part of a log starts when `fraction` of it is held

@@ -155,7 +155,7 @@ bool EkfFilter::Predict(int L, int k) {
     s_.window_dof = 0;
     // The interval as applied: a lagged input (servo_lag, motor_lag) carries its lag
     // from row to row at the current estimate (dynamics/held_input.h).
-    s_.held = HeldInput::Steady(log.inputs.input(0), log.inputs.time(0));
+    s_.held = FirstHeldInput(log.inputs, pb_.vehicle.model.InputLags(propagator_.theta().data()));
     s_.log = L;
     return true;
   }

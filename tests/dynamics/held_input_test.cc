@@ -9,6 +9,7 @@
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
+#include "core/errors.h"
 #include "dynamics/state.h"
 
 namespace coaxid {
@@ -93,6 +94,54 @@ TEST(HeldInput, NoLagIsTheLoggedRow) {
       EXPECT_EQ(LaggedInput(path[k], i, 0.0, hold.time(k) + 1e-3), hold.input(k)[i]);
     }
   }
+}
+
+// A hold cut from a longer one (a held-out tail) starts its lagged inputs
+// where the source's rows before the cut left them (the lead-in), with the
+// derivative in the time constant carried through: the tail's rows equal the
+// whole hold's rows, bit for bit, when the lead-in holds every earlier row,
+// and to e^(-lead-in / T) of the step otherwise. Without the lead-in the tail
+// starts settled at its first command (the logged row).
+TEST(HeldInput, ATailStartsWhereTheLeadInLeftTheLag) {
+  const InputHold whole = RandomRows(400, 4);
+  const InputVector lag = {0.19, 0.11, 0.03, 0.03};
+  const std::vector<HeldInput> path = HeldInputs(whole, lag);
+  auto tail = [&](int begin, int lead_in_first) {
+    std::vector<double> t(whole.times().begin() + begin, whole.times().end());
+    std::vector<InputVector> u, lead_u;
+    for (int k = begin; k < whole.size(); ++k) u.push_back(whole.input(k));
+    for (int k = lead_in_first; k < begin; ++k) lead_u.push_back(whole.input(k));
+    InputHold h(t, u);
+    h.SetLeadIn(std::vector<double>(whole.times().begin() + lead_in_first,
+                                    whole.times().begin() + begin),
+                lead_u);
+    return h;
+  };
+  const int begin = 300;
+  const InputHold full_lead_in = tail(begin, 0);
+  const std::vector<HeldInput> tail_path = HeldInputs(full_lead_in, lag);
+  for (int k : {0, 1, 50}) {
+    for (int i = 0; i < kNumInputs; ++i) {
+      EXPECT_EQ(tail_path[k].start[i], path[begin + k].start[i]) << k << " " << i;
+      EXPECT_EQ(tail_path[k].start_dlag[i], path[begin + k].start_dlag[i]) << k << " " << i;
+    }
+  }
+  EXPECT_EQ(FirstHeldInput(full_lead_in, lag).start[kOmega1], path[begin].start[kOmega1]);
+  // A lead-in of the last 100 rows only: the rotor commands of RandomRows are
+  // constant, so only the swashplate's history is cut off, and it weighs
+  // e^(-lead-in / 0.03) of the commands' 0.1 rad spread.
+  const double lead_s = whole.time(begin) - whole.time(begin - 100);
+  const HeldInput short_lead_in = FirstHeldInput(tail(begin, begin - 100), lag);
+  for (int i : {kDeltaCx, kDeltaCy}) {
+    EXPECT_NEAR(short_lead_in.start[i], path[begin].start[i], 0.1 * std::exp(-lead_s / 0.03));
+  }
+  // No lead-in: settled at the first command.
+  const InputHold no_lead_in = tail(begin, begin);
+  EXPECT_EQ(FirstHeldInput(no_lead_in, lag).start, whole.input(begin));
+  EXPECT_NE(path[begin].start[kDeltaCx], whole.input(begin)[kDeltaCx]);
+  // Lead-in times must end before the first row.
+  InputHold bad = no_lead_in;
+  EXPECT_THROW(bad.SetLeadIn({whole.time(begin)}, {whole.input(begin)}), InputError);
 }
 
 }  // namespace
