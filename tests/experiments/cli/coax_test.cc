@@ -51,6 +51,19 @@ class CoaxCliTest : public CliTestDir {
     return config;
   }
 
+  // The simulated flight's bar (T_b 1.8 s, k_b 0.6, d_u 0.165 m) within 3 of
+  // the std a report gives.
+  static void ExpectTheFlightsBar(const nlohmann::json& report) {
+    const std::pair<const char*, double> truth[] = {
+        {"stabilizer_bar.T_b", 1.8}, {"stabilizer_bar.k_b", 0.6}, {"stabilizer_bar.d_u", 0.165}};
+    for (const auto& [name, value] : truth) {
+      const nlohmann::json& p = report["parameters"][name];
+      ASSERT_TRUE(p["std"].is_number()) << name << ": " << p.dump();
+      EXPECT_LT(std::fabs(p["value"].get<double>() - value), 3 * p["std"].get<double>())
+          << name << ": " << p.dump();
+    }
+  }
+
   // The channels a report's plausibility verdict names as unexplained.
   static std::set<std::string> Unexplained(const nlohmann::json& report) {
     std::set<std::string> out;
@@ -114,14 +127,7 @@ TEST_F(CoaxCliTest, OutputErrorWithTheBarDeclaredRecoversIt) {
                                 " --logs=" + log + " --out=" + Path("oe"));
   ASSERT_EQ(r.status, 0) << r.output;
   const nlohmann::json report = nlohmann::json::parse(ReadFile(Path("oe") + "/report.json"));
-  const std::pair<const char*, double> truth[] = {
-      {"stabilizer_bar.T_b", 1.8}, {"stabilizer_bar.k_b", 0.6}, {"stabilizer_bar.d_u", 0.165}};
-  for (const auto& [name, value] : truth) {
-    const nlohmann::json& p = report["parameters"][name];
-    ASSERT_TRUE(p["std"].is_number()) << name << ": " << p.dump();
-    EXPECT_LT(std::fabs(p["value"].get<double>() - value), 3 * p["std"].get<double>())
-        << name << ": " << p.dump();
-  }
+  ExpectTheFlightsBar(report);
   EXPECT_EQ(report["plausibility"]["describes_vehicle"], true) << report["plausibility"].dump();
 }
 
@@ -136,14 +142,7 @@ TEST_F(CoaxCliTest, TheEkfFitsABarInTheConfigAndReportsItsTilt) {
                                 " --out=" + Path("ekf"));
   ASSERT_EQ(r.status, 0) << r.output;
   const nlohmann::json report = nlohmann::json::parse(ReadFile(Path("ekf") + "/report.json"));
-  const std::pair<const char*, double> truth[] = {
-      {"stabilizer_bar.T_b", 1.8}, {"stabilizer_bar.k_b", 0.6}, {"stabilizer_bar.d_u", 0.165}};
-  for (const auto& [name, value] : truth) {
-    const nlohmann::json& p = report["parameters"][name];
-    ASSERT_TRUE(p["std"].is_number()) << name << ": " << p.dump();
-    EXPECT_LT(std::fabs(p["value"].get<double>() - value), 3 * p["std"].get<double>())
-        << name << ": " << p.dump();
-  }
+  ExpectTheFlightsBar(report);
   // Neither the estimation nor the held-out tail loses the filter: the tail
   // starts its lagged rotors (motor_lag, 0.19 and 0.11 s) where the rows
   // before it left them (before, it took them as settled at their commands
