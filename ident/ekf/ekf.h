@@ -1,4 +1,5 @@
-// Extended Kalman filter on the 12 states augmented with the free parameters,
+// Extended Kalman filter on the model's states (the 12 of dynamics/state.h,
+// then any effect's own: the stabilizer bar's tilt) augmented with the free parameters,
 // from flight logs: the recursive estimator for long logs and online use, and
 // a second opinion on output-error (issue 5).
 //
