@@ -103,8 +103,10 @@ struct ScaleFreeRatio {
 // The ratios flight logs determine: d*beta/Ixx, d*beta/Iyy, gamma1/Izz,
 // gamma2/Izz, Iyy/Ixx, Izz/Ixx and every moment-type effect parameter over
 // Ixx, at `parameters`. covariance: of the free parameters (free_indices),
-// unscaled; a parameter not free contributes no variance. Empty when the
-// gauge has no direction (no flight log, or the invariance does not hold).
+// unscaled; a parameter not free contributes no variance. A ratio that moves
+// along a direction the covariance leaves out (zero variance: undetermined
+// by the logs) gets std NaN: not determined. Empty when the gauge has no
+// direction (no flight log, or the invariance does not hold).
 std::vector<ScaleFreeRatio> ScaleFreeRatios(const ScaleGauge& gauge,
                                             const ParameterSet& parameters,
                                             const std::vector<int>& free_indices,

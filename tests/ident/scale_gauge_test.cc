@@ -87,5 +87,42 @@ TEST(ScaleGauge, RatiosAreInvariantAndTheirStdIsTheDeltaMethod) {
   }
 }
 
+// A covariance that leaves a direction out (a fit's, restricted to what the
+// logs determine): a ratio that moves along it by more than its std over a
+// move of one scale is not determined (std NaN); one that does not keeps the
+// delta method's std. The direction here: Izz, gamma1 and gamma2 together
+// (the yaw axis, as in the confusion study's run p0_s59), which leaves
+// gamma1/Izz and gamma2/Izz unchanged and moves Izz/Ixx.
+TEST(ScaleGauge, ARatioAlongAnUndeterminedDirectionHasNoStd) {
+  ParameterSet p = Nominal().parameters;
+  const ScaleGauge g = Gauge({Logs()[0]}, &p);
+  const std::vector<int> free = p.FreeIndices();
+  const int n = static_cast<int>(free.size());
+  Eigen::VectorXd scales(n), v = Eigen::VectorXd::Zero(n);  // v: scaled coordinates
+  for (int k = 0; k < n; ++k) {
+    scales[k] = p[free[k]].scale;
+    const std::string& name = p[free[k]].name;
+    if (name == "Izz" || name == "gamma1" || name == "gamma2") v[k] = p[free[k]].value / scales[k];
+  }
+  v.normalize();
+  Eigen::MatrixXd B = Eigen::MatrixXd::Random(n, n);
+  for (int k = 0; k < n; ++k) B.row(k) *= 0.05 / std::sqrt(n);
+  const Eigen::MatrixXd projector = Eigen::MatrixXd::Identity(n, n) - v * v.transpose();
+  const Eigen::MatrixXd scaled = projector * B * B.transpose() * projector;
+  const Eigen::MatrixXd C = scales.asDiagonal() * scaled * scales.asDiagonal();
+  for (const ScaleFreeRatio& q : ScaleFreeRatios(g, p, free, C)) {
+    if (q.name == "Izz/Ixx") {
+      EXPECT_TRUE(std::isnan(q.std)) << q.std;
+    } else {
+      EXPECT_TRUE(std::isfinite(q.std) && q.std > 0) << q.name << " " << q.std;
+    }
+  }
+  // The same covariance without the projection: every std finite.
+  const Eigen::MatrixXd full = scales.asDiagonal() * B * B.transpose() * scales.asDiagonal();
+  for (const ScaleFreeRatio& q : ScaleFreeRatios(g, p, free, full)) {
+    EXPECT_TRUE(std::isfinite(q.std)) << q.name;
+  }
+}
+
 }  // namespace
 }  // namespace coaxid

@@ -87,11 +87,16 @@ TEST(FlightOnly, RatioStdMatchesTheSpreadOverSeeds) {
     for (double v : values[k]) mean += v / seeds;
     for (double v : values[k]) var += (v - mean) * (v - mean) / (seeds - 1);
     const double spread = std::sqrt(var);
-    // Izz/Ixx is left out: Izz is seen apart from gamma1, gamma2 only through
-    // the small Euler coupling terms, and on short logs the fits scatter
-    // non-Gaussian (measured, 20 seeds: 4 s logs, std 0.0038 vs spread 0.046
-    // with 3 fits at 0.12-0.28 around 0.094; 8 s logs, 0.015 vs 0.029).
-    if (names[k] == "Izz/Ixx") continue;
+    // Izz/Ixx has no std: Izz is seen apart from gamma1, gamma2 only through
+    // the small Euler coupling terms, which these 4 s logs leave undetermined
+    // (21-53 % of the ratio's scaled gradient along that direction, the
+    // others at most 1.2 %; ScaleFreeRatios). Its delta-method std was a
+    // claim the fits did not back (measured, 20 seeds: std 0.0038 against a
+    // spread of 0.046, with 3 fits at 0.12-0.28 around 0.094).
+    if (names[k] == "Izz/Ixx") {
+      EXPECT_TRUE(std::isnan(mean_std[k])) << mean_std[k];
+      continue;
+    }
     // With 20 seeds the sample std itself scatters by ~16 % (1 / sqrt(2 (n - 1))):
     // 1.5x is ~2.5 of those.
     EXPECT_LT(mean_std[k], 1.5 * spread) << names[k] << " std " << mean_std[k] << " spread "
@@ -215,6 +220,9 @@ TEST(FlightOnly, HoldingTheScaleInTheSolveAgreesOrMeetsTheBound) {
   EXPECT_EQ(held.parameters.Value("d"), nominal.parameters.Value("d"));
   ASSERT_EQ(held.ratios.size(), free.ratios.size());
   for (size_t k = 0; k < free.ratios.size(); ++k) {
+    // A ratio the log leaves undetermined (no std: Izz/Ixx on this short
+    // log) may sit elsewhere along that direction.
+    if (!std::isfinite(free.ratios[k].std)) continue;
     // One minimum reached two ways: far inside the std.
     EXPECT_NEAR(held.ratios[k].value, free.ratios[k].value, 0.05 * free.ratios[k].std)
         << free.ratios[k].name;
