@@ -233,14 +233,12 @@ std::vector<ScaleFreeRatio> ScaleFreeRatios(const ScaleGauge& gauge,
     for (int k = 0; k < nf; ++k) scales[k] = parameters[free_indices[k]].scale;
     const Eigen::MatrixXd scaled =
         scales.cwiseInverse().asDiagonal() * covariance * scales.cwiseInverse().asDiagonal();
+    // Eigenvalues in increasing order: the zero ones first.
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
     const double largest = eigen.eigenvalues().cwiseAbs().maxCoeff();
-    for (int k = 0; k < nf; ++k) {
-      if (eigen.eigenvalues()[k] <= 1e-12 * largest) {
-        undetermined.conservativeResize(Eigen::NoChange, undetermined.cols() + 1);
-        undetermined.rightCols(1) = eigen.eigenvectors().col(k);
-      }
-    }
+    int zero = 0;
+    while (zero < nf && eigen.eigenvalues()[zero] <= 1e-12 * largest) ++zero;
+    undetermined = eigen.eigenvectors().leftCols(zero);
   }
   for (ScaleFreeRatio& q : out) {
     q.value = q.Evaluate(parameters);

@@ -257,7 +257,8 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
       options, &probe,
       [&](const EkfOptions& o) {
         history = std::make_unique<EkfHistoryFiles>(
-            estimation, vehicle.model.StateNames(), o.smoother, fs::temp_directory_path().string(), window_starts);
+            estimation, vehicle.model.StateNames(), o.smoother,
+            fs::temp_directory_path().string(), window_starts);
         return RunEkf(vehicle, estimation, context.noise, o, history.get());
       },
       say, FLAGS_ekf_process_noise_from_data ? 6 : 0);

@@ -184,12 +184,13 @@ bool EkfPropagator::PropagateBlocks(double t0, double t1, const HeldInput& u,
                                     const EkfState& x0_in, EkfTransition* result) {
   using Blocks = TransitionBlocks<N>;
   CHECK(t1 > t0);
-  // Fixed-size arithmetic for the 12 states (a copy in and out), the same
-  // equations otherwise.
+  // Fixed-size arithmetic for the 12 states (a copy in and out); with effect
+  // states the blocks are the result's own.
   Blocks fixed;
   Blocks* out = &fixed;
-  const typename Blocks::Vector x0 = x0_in;
-  const typename Blocks::Vector state_psd = state_psd_;
+  if constexpr (N == Eigen::Dynamic) out = result;
+  const typename Blocks::Vector& x0 = x0_in;             // a converted copy only for N = 12
+  const typename Blocks::Vector& state_psd = state_psd_;
   ++counters_.intervals;
   const int np = num_parameters();
   const int substeps = std::max(1, static_cast<int>(std::ceil((t1 - t0) / max_substep_ - 1e-9)));
@@ -244,11 +245,13 @@ bool EkfPropagator::PropagateBlocks(double t0, double t1, const HeldInput& u,
   if (!out->A.allFinite() || !out->B.allFinite() || !out->Qxx.allFinite()) {
     return Fail("state transition matrix not finite");
   }
-  result->x = out->x;
-  result->A = out->A;
-  result->B = out->B;
-  result->Qxx = out->Qxx;
-  result->Qxp = out->Qxp;
+  if constexpr (N != Eigen::Dynamic) {
+    result->x = out->x;
+    result->A = out->A;
+    result->B = out->B;
+    result->Qxx = out->Qxx;
+    result->Qxp = out->Qxp;
+  }
   return true;
 }
 
