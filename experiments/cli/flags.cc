@@ -39,6 +39,10 @@ DEFINE_bool(smoother, true,
 DEFINE_bool(ekf_covariance_pass, true,
             "identify --method=ekf: a second filter pass linearised at the estimates gives the "
             "reported std (the single pass is over-confident on weakly observable directions)");
+DEFINE_int32(ekf_refinements, 10,
+             "identify --method=ekf: at most this many Gauss-Newton steps of the filter's "
+             "likelihood when the covariance pass finds the estimate short of its maximum "
+             "(ident/ekf/ekf.h, Refinement; 0: report the single pass's estimate)");
 DEFINE_string(ekf_scale_anchor, "d",
               "identify --method=ekf: d (hold d at its config value when d, gamma1, gamma2, "
               "Ixx, Iyy, Izz are all free: flight logs fix only their ratios) or none (augment "

@@ -21,6 +21,7 @@ DECLARE_string(in);
 // identify --method=ekf (experiments/cli/identify_ekf.h).
 DECLARE_bool(smoother);
 DECLARE_bool(ekf_covariance_pass);
+DECLARE_int32(ekf_refinements);
 DECLARE_string(ekf_scale_anchor);
 DECLARE_string(ekf_transition);
 DECLARE_string(ekf_initial_report);

@@ -43,7 +43,7 @@ constexpr const char* kUsage =
     "usage: coaxid identify --method=ekf --logs=A.csv[,B.csv] --config=F --out=DIR "
     "[--validate=C.csv] [--holdout_fraction=0.2] [--smoother=true] "
     "[--ekf_scale_anchor=d|none] [--ekf_transition=linearised|sensitivities] "
-    "[--ekf_covariance_pass=true] [--ekf_process_noise=1] "
+    "[--ekf_covariance_pass=true] [--ekf_refinements=10] [--ekf_process_noise=1] "
     "[--ekf_process_noise_from_data=true] [--ekf_window_s=1] "
     "[--ekf_noise_adaptations=1] [--ekf_noise_adaptation_rows=120000] [--ekf_gate=1e-6] [--ekf_initial_report=R.json] "
     "[--prior=R.json[:name,...]]";
@@ -96,6 +96,17 @@ std::string ApplyInitialReport(const std::string& path, Vehicle* vehicle, EkfOpt
 void PrintEstimates(const EkfResult& r) {
   std::printf("ekf estimates (std from the %s):\n",
               r.covariance_pass ? "covariance pass at the estimates" : "filter");
+  if (r.refinements > 0 || !r.refinement_converged) {
+    std::printf("  (%d Gauss-Newton refinement(s) of the filter's likelihood: largest step "
+                "%.2g std from the estimation pass, %.2g std from these)\n",
+                r.refinements, r.step_std_at_pass1, r.step_std_at_estimate);
+  }
+  if (!r.refinement_converged) {
+    std::printf("  SHORT OF THE MAXIMUM of the filter's likelihood (%s): a further step would "
+                "move %s; these std do not hold. Start closer (output_error's estimates as the "
+                "config's values) or judge them with output_error.\n",
+                r.refinement_stop.c_str(), r.short_of_maximum.c_str());
+  }
   for (size_t k = 0; k < r.free_names.size(); ++k) {
     if (r.identifiable[k]) {
       std::printf("  %-10s % .6e +- %.2e\n", r.free_names[k].c_str(), r.estimate[k],
@@ -129,6 +140,11 @@ nlohmann::json IdentifyEkf(const IdentifyRun& run) {
   EkfOptions options;
   options.smoother = FLAGS_smoother;
   options.covariance_pass = FLAGS_ekf_covariance_pass;
+  if (FLAGS_ekf_refinements < 0) {
+    throw InputError("--ekf_refinements must be >= 0, got " +
+                     std::to_string(FLAGS_ekf_refinements));
+  }
+  options.max_refinements = FLAGS_ekf_refinements;
   if (FLAGS_ekf_scale_anchor == "d") {
     options.scale_anchor = EkfOptions::ScaleAnchor::kHubDistance;
   } else if (FLAGS_ekf_scale_anchor == "none") {

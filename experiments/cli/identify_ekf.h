@@ -3,7 +3,7 @@
 //   coaxid identify --method=ekf --logs=A.csv[,B.csv] --config=F --out=DIR
 //       [--validate=C.csv,...] [--holdout_fraction=0.2] [--smoother=true]
 //       [--ekf_scale_anchor=d|none] [--ekf_transition=linearised|sensitivities]
-//       [--ekf_covariance_pass=true] [--ekf_process_noise=1] [--ekf_process_noise_from_data=true] [--ekf_window_s=1]
+//       [--ekf_covariance_pass=true] [--ekf_refinements=10] [--ekf_process_noise=1] [--ekf_process_noise_from_data=true] [--ekf_window_s=1]
 //       [--ekf_noise_adaptations=1] [--ekf_gate=1e-6] [--ekf_initial_report=R.json]
 //
 // Flight logs only. Measurement noise from first differences

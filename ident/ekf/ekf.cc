@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <utility>
 
 #include <Eigen/Cholesky>
 #include <glog/logging.h>
@@ -15,6 +16,7 @@
 #include "dynamics/outputs.h"
 #include "ident/ekf/history_sink.h"
 #include "ident/ekf/pass.h"
+#include "ident/ekf/refinement_step.h"
 #include "ident/free_parameters.h"
 
 namespace coaxid {
@@ -110,6 +112,13 @@ bool EkfOptions::IsValid(std::string* why) const {
   if (!(divergence_window_s > 0)) return fail("divergence_window_s must be > 0");
   if (!(undetermined_variance_ratio > 0 && undetermined_variance_ratio < 1)) {
     return fail("undetermined_variance_ratio must lie in (0, 1)");
+  }
+  if (max_refinements < 0) return fail("max_refinements must be >= 0");
+  if (!(unconverged_step_std >= refine_tolerance_std && std::isfinite(unconverged_step_std))) {
+    return fail("unconverged_step_std must be finite and >= refine_tolerance_std");
+  }
+  if (!(refine_tolerance_std > 0 && std::isfinite(refine_tolerance_std))) {
+    return fail("refine_tolerance_std must be finite and > 0");
   }
   if (progress_every_rows < 1) return fail("progress_every_rows must be >= 1");
   if (smoother_block_rows < 0) return fail("smoother_block_rows must be >= 0 (0: automatic)");
@@ -279,32 +288,134 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
   for (int k = 0; k < np; ++k) result.parameters.SetValue(free.names()[k], result.estimate[k]);
   Eigen::MatrixXd covariance = pass1.P.bottomRightCorner(np, np);
 
-  // Pass 2: covariance at the estimate (and the reported states).
+  long total_rows = problem.total_rows;  // for progress; grows with each refinement's pass
+  // Pass 2: covariance at the estimate (and the reported states); with the
+  // refinement (header comment) first the Gauss-Newton steps it calls for.
   if (covariance_pass) {
     EkfPassRecord record2;
     record2.states = true;
     record2.std_at_estimate = true;
-    Vehicle at_estimate = anchored;
-    at_estimate.parameters = result.parameters;
-    const EkfProblem problem2{at_estimate, logs, problem.noise, options, free,
+    auto frozen_pass = [&](const Eigen::VectorXd& p, bool final_pass) {
+      Vehicle at = anchored;
+      for (int k = 0; k < np; ++k) at.parameters.SetValue(free.names()[k], p[k] * free.scales()[k]);
+      const EkfProblem frozen{at, logs, problem.noise, options, free,
                               problem.lower, problem.upper, problem.qp, problem.prior,
-                              problem.qx, problem.total_rows};
-    const Clock::time_point c2 = Clock::now();
-    const PassResult pass2 =
-        RunPass(problem2, p_final, true, options.smoother, record2, history, &rows_done);
-    result.covariance_pass_s = Seconds(c2, Clock::now());
+                              problem.qx, total_rows};
+      const Clock::time_point c = Clock::now();
+      PassResult pass = RunPass(frozen, p, true, final_pass && options.smoother,
+                                final_pass ? record2 : EkfPassRecord(), history, &rows_done);
+      result.covariance_pass_s += Seconds(c, Clock::now());
+      if (pass.ok) add_effort(pass);
+      return pass;
+    };
+    // The largest move of a parameter from p to `to`, in its std at p.
+    auto move_in_std = [&](const Eigen::VectorXd& p, const Eigen::VectorXd& to,
+                           const PassResult& at) {
+      const Eigen::VectorXd sd = at.P.diagonal().tail(np).cwiseMax(1e-300).cwiseSqrt();
+      return np > 0 ? (to - p).cwiseAbs().cwiseQuotient(sd).maxCoeff() : 0.0;
+    };
+    auto stepped = [&](const Eigen::VectorXd& p, const PassResult& at, double lambda,
+                       RefinementStepShape shape) {
+      return SteppedParameters(p, at.step, lambda, shape, at.P.bottomRightCorner(np, np),
+                               problem.lower, problem.upper);
+    };
+    auto largest_step = [&](const Eigen::VectorXd& p, const PassResult& at) {
+      return move_in_std(p, stepped(p, at, 1.0, RefinementStepShape::kLinear), at);
+    };
+    PassResult pass2 = frozen_pass(p_final, true);
     if (!pass2.ok) return failed(pass2);
-    add_effort(pass2);
+    // From p, the Gauss-Newton step of the frozen pass at p: take it (or a
+    // half, a quarter ... of it, while that still exceeds the tolerance) if
+    // the likelihood rises there.
+    Eigen::VectorXd p = p_final;
+    PassResult at_p = pass2;
+    const double tolerance = options.refine_tolerance_std;
+    double largest = largest_step(p, at_p);
+    result.step_std_at_pass1 = largest;
+    result.frozen_log_likelihood_at_pass1 = pass2.log_likelihood;
+    for (;;) {
+      if (largest <= tolerance) {
+        result.refinement_stop = "no parameter's step exceeds the tolerance";
+        break;
+      }
+      if (result.refinements == options.max_refinements) {
+        result.refinement_stop = "the refinements allowed are spent";
+        result.refinement_converged = false;
+        break;
+      }
+      // The step in each shape (refinement_step.h), halved while the
+      // likelihood does not rise and it still exceeds the tolerance; a shape
+      // that lands within a tenth of a std of the other is not tried again.
+      bool rose = false;
+      for (double lambda = 1; !rose && lambda * largest > tolerance; lambda /= 2) {
+        Eigen::VectorXd tried;
+        for (const RefinementStepShape shape :
+             {RefinementStepShape::kLogarithmic, RefinementStepShape::kLinear}) {
+          const Eigen::VectorXd to = stepped(p, at_p, lambda, shape);
+          if (tried.size() > 0 && move_in_std(tried, to, at_p) < 0.1) continue;
+          tried = to;
+          total_rows += rows_per_pass;
+          PassResult trial = frozen_pass(to, false);
+          if (trial.ok && trial.log_likelihood > at_p.log_likelihood) {
+            p = to;
+            at_p = std::move(trial);
+            rose = true;
+            break;
+          }
+        }
+      }
+      if (!rose) {
+        result.refinement_stop = "the likelihood does not rise along the step";
+        result.refinement_converged = largest <= options.unconverged_step_std;
+        break;
+      }
+      ++result.refinements;
+      largest = largest_step(p, at_p);
+    }
+    result.step_std_at_estimate = largest;
+    if (result.refinements > 0) {
+      total_rows += rows_per_pass;
+      pass2 = frozen_pass(p, true);
+      if (!pass2.ok) return failed(pass2);
+      result.estimate = p.cwiseProduct(free.scales());
+      for (int k = 0; k < np; ++k) result.parameters.SetValue(free.names()[k], result.estimate[k]);
+    }
+    result.frozen_log_likelihood = pass2.log_likelihood;
     covariance = pass2.P.bottomRightCorner(np, np);
+    if (!result.refinement_converged) {
+      // The parameters the remaining step moves by more than the tolerance.
+      const Eigen::VectorXd to = stepped(p, pass2, 1.0, RefinementStepShape::kLinear);
+      const Eigen::VectorXd sd = pass2.P.diagonal().tail(np).cwiseMax(1e-300).cwiseSqrt();
+      std::string moved;
+      for (int k = 0; k < np; ++k) {
+        const double in_std = (to[k] - p[k]) / sd[k];
+        if (std::fabs(in_std) <= tolerance) continue;
+        char buffer[96];
+        std::snprintf(buffer, sizeof buffer, "%s%s %+.1f std", moved.empty() ? "" : ", ",
+                      free.names()[k].c_str(), in_std);
+        moved += buffer;
+      }
+      result.short_of_maximum = moved;
+      result.notes.push_back(
+          "The estimate is short of the maximum of the filter's likelihood (" +
+          result.refinement_stop + " after " + std::to_string(result.refinements) +
+          " Gauss-Newton refinements): a further step would move " + moved +
+          ". Their std describe the curvature at a point short of the maximum: start "
+          "closer (output_error's estimates as the config's values) or judge them with "
+          "output_error.");
+    }
   }
   if (options.progress && rows_done % options.progress_every_rows != 0) {
-    options.progress(rows_done, problem.total_rows);
+    options.progress(rows_done, total_rows);
   }
   result.covariance = covariance;
   result.estimate_std = covariance.diagonal().cwiseMax(0.0).cwiseSqrt().cwiseProduct(free.scales());
   result.estimates_from =
       std::string("the filter's estimate at the end of the last log") +
-      (options.smoother ? " (equal to the smoothed value there)" : "") +
+      (result.refinements > 0
+           ? ", refined by " + std::to_string(result.refinements) +
+                 " Gauss-Newton steps of the filter's likelihood"
+           : std::string(options.smoother ? " (equal to the smoothed value there)" : "")) +
       (covariance_pass
            ? "; std from a second pass linearised at that estimate (covariance pass)"
            : "; std from the filter");

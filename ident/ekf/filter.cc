@@ -86,6 +86,7 @@ EkfFilter::EkfFilter(const EkfProblem& problem, const Eigen::VectorXd& p_start, 
   s_.P = Eigen::MatrixXd::Zero(n_, n_);
   s_.z.tail(np_) = p_start;
   s_.P.bottomRightCorner(np_, np_) = pb_.prior;
+  if (freeze_) s_.step = Eigen::VectorXd::Zero(n_);
   z_pred_.resize(n_);
   P_pred_.resize(n_, n_);
   phi_ = Eigen::MatrixXd::Identity(n_, n_);
@@ -157,6 +158,7 @@ bool EkfFilter::Predict(int L, int k) {
     // from row to row at the current estimate (dynamics/held_input.h).
     s_.held = FirstHeldInput(log.inputs, pb_.vehicle.model.InputLags(propagator_.theta().data()));
     s_.log = L;
+    if (freeze_) s_.step.head(nx_).setZero();  // the log's states do not depend on p
     return true;
   }
   const double t0 = log.inputs.time(k - 1), t1 = log.inputs.time(k);
@@ -179,6 +181,10 @@ bool EkfFilter::Predict(int L, int k) {
   }
   phi_.topLeftCorner(nx_, nx_) = transition_.A;
   phi_.topRightCorner(nx_, np_) = transition_.B;
+  if (freeze_) {  // dz <- Phi dz
+    const Eigen::VectorXd dx = transition_.A * s_.step.head(nx_) + transition_.B * s_.step.tail(np_);
+    s_.step.head(nx_) = dx;
+  }
   return true;
 }
 
@@ -300,6 +306,12 @@ bool EkfFilter::Update(EkfTally* tally) {
     nis_ = nis;
     if (freeze_) {
       z.head(nx_).noalias() += K_.topRows(nx_) * nu_;
+      // The free filter's innovations are this one's less H dz, and it also
+      // moves p by K_p nu: dz <- (I - K H) dz + [0; K_p nu] (exact for a
+      // linear model).
+      const Eigen::VectorXd h_step = H_ * s_.step;
+      s_.step.noalias() -= K_ * h_step;
+      s_.step.tail(np).noalias() += K_.bottomRows(np) * nu_;
     } else {
       z.noalias() += K_ * nu_;
     }
@@ -322,10 +334,12 @@ bool EkfFilter::Update(EkfTally* tally) {
         }
       }
     }
-    if (tally != nullptr) ++tally->updates;
-    if (record) {
+    if (tally != nullptr) {
+      ++tally->updates;
       tally->log_likelihood -= 0.5 * (nis + 2 * llt_.matrixLLT().diagonal().array().log().sum() +
                                       m * std::log(2 * M_PI));
+    }
+    if (record) {
       const bool counted = t1 - log.inputs.time(0) >= options.nis_burn_in_s;
       for (int j = 0; j < m; ++j) {
         if (counted) {

@@ -71,12 +71,19 @@ struct EkfFilterState {
   // CVODE's first-step hint (dynamics/integrator.h): without it a recomputed
   // interval takes other steps and differs in the last digits.
   double step_hint = 0;
+  // Frozen filter (covariance pass) only: dz, how far the same filter with
+  // the parameters' mean free would have moved [x; p] from this one's, to
+  // first order (the linearisation along this pass). Its parameter part at
+  // the end is the Gauss-Newton step of the filter's likelihood from the
+  // frozen parameters (ekf.h, "Refinement").
+  Eigen::VectorXd step;
 };
 
 class EkfFilter {
  public:
   // From parameters p_start (scaled) with the prior covariance; freeze: keep
-  // the parameters' mean (covariance pass). Positioned before log 0.
+  // the parameters' mean (covariance pass) and track state().step.
+  // Positioned before log 0.
   EkfFilter(const EkfProblem& problem, const Eigen::VectorXd& p_start, bool freeze);
 
   // Moves to `row` of `log`: row 0 starts the log (its states from the row,

@@ -151,6 +151,7 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
   }
   out.z = filter.state().z;
   out.P = filter.state().P;
+  if (freeze) out.step = filter.state().step.tail(np);
   EkfPropagator::Counters recompute_counters;
   Integrator::Stats recompute_integrator;
   if (smooth) {

@@ -40,6 +40,9 @@ struct PassResult : EkfTally {
   double failure_time = 0;
   Eigen::VectorXd z;  // final augmented state
   Eigen::MatrixXd P;  // and covariance
+  // A frozen pass: the Gauss-Newton step of the filter's likelihood from its
+  // parameters (scaled; EkfFilterState::step).
+  Eigen::VectorXd step;
   double propagation_s = 0, update_s = 0, smoother_s = 0;
   EkfPropagator::Counters counters;
   Integrator::Stats integrator;

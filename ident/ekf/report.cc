@@ -224,6 +224,23 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
                {"degrees_of_freedom", r.total_nis.dof}}},
       {"consistent", all_consistent}};
   ekf["log_likelihood"] = Number(r.log_likelihood);
+  if (r.covariance_pass) {
+    ekf["refinement"] = {
+        {"definition", "Gauss-Newton steps of the filter's likelihood (parameters held in the "
+                       "mean) from the estimation pass's estimate, until no parameter's step "
+                       "exceeds tolerance_std of its std or the likelihood stops rising along "
+                       "the step; largest_step_std: the largest step in std at that estimate "
+                       "and at the reported one; converged: false when max_steps stopped it"},
+        {"steps", r.refinements},
+        {"max_steps", options.max_refinements},
+        {"tolerance_std", options.refine_tolerance_std},
+        {"largest_step_std", {{"estimation_pass", Number(r.step_std_at_pass1)},
+                              {"reported", Number(r.step_std_at_estimate)}}},
+        {"log_likelihood", {{"estimation_pass", Number(r.frozen_log_likelihood_at_pass1)},
+                            {"reported", Number(r.frozen_log_likelihood)}}},
+        {"converged", r.refinement_converged},
+        {"stopped_because", r.refinement_stop}};
+  }
 
   json undetermined = json::array();
   for (const UndeterminedDirection& d : r.undetermined) {

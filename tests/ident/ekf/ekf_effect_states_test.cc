@@ -8,8 +8,8 @@
 //    airframe's unknowns within 3 of their reported std of the truth (the
 //    tolerance of ekf_test.cc: two-sided 99.7 % for a consistent
 //    estimator), and the bar's tilt, never measured, tracked;
-//  - the bar's parameters augmented too (from the truth: the filter's
-//    consistency, not its basin; see the test): within 3 std;
+//  - the bar's parameters augmented too, from the truth (the filter's
+//    consistency) and from 20 % off (the refinement's basin): within 3 std;
 //  - the mean NIS inside its 99.9 % band (ExpectConsistent);
 //  - the transition with the bar: linearised against the variational
 //    equations.
@@ -157,13 +157,7 @@ TEST(EkfEffectStates, TiltTrackedAndAirframeEstimatedWithAKnownBarOnRandomBars) 
 }
 
 // The bar's three parameters augmented too, from the truth: the filter stays
-// consistent with them and reports a std that covers its estimate. (From 20 %
-// off a single pass may stop short along the ridge where k_b d_u, the moment,
-// stays put and only the accelerometers' force term separates k_b from d_u:
-// measured on the first draw of the test above, started 20 % off, k_b 0.414
-// +- 0.031 against 0.515, T_b and d_u within 1 std, NIS 1.085 at 100 x the
-// process noise; output_error recovers the bar from 1.0, 0.3, 0.15
-// (coax_test.cc).)
+// consistent with them and reports a std that covers its estimate.
 TEST(EkfEffectStates, BarParametersAugmentedStayConsistent) {
   const std::map<std::string, double> bar = {{"T_b", 1.8}, {"k_b", 0.6}, {"d_u", 0.165}};
   const BarFlight f = FlyCoax(bar, bar, 3210);
@@ -175,6 +169,72 @@ TEST(EkfEffectStates, BarParametersAugmentedStayConsistent) {
   ExpectWithinThreeStd(r, f.truth, what);
   ExpectConsistent(r, what);
   ExpectTiltTracked(r, f, what);
+}
+
+// The bar declared 20 % off (each parameter up or down at random): a single
+// pass stops short along the ridge where k_b d_u, the moment, stays put and
+// only the accelerometers' force term separates k_b from d_u (before the
+// refinement, on the first draw of the test above: k_b 0.414 +- 0.031
+// against 0.515); the Gauss-Newton refinement of the filter's likelihood
+// (ekf.h, "Refinement") takes it to the maximum. Random bars (generator seed
+// 2611, chosen once, never tuned), every parameter within 3 std of the truth
+// and the refinement converged.
+TEST(EkfEffectStates, RefinedToTheTruthFromTwentyPercentOffOnRandomBars) {
+  std::mt19937_64 rng(2611);
+  std::uniform_real_distribution<double> T_b(0.5, 2.0), k_b(0.3, 1.0), d_u(0.1, 0.2);
+  std::bernoulli_distribution up(0.5);
+  for (int draw = 0; draw < 2; ++draw) {
+    const std::map<std::string, double> bar = {
+        {"T_b", T_b(rng)}, {"k_b", k_b(rng)}, {"d_u", d_u(rng)}};
+    std::map<std::string, double> start;
+    for (const auto& [name, value] : bar) start[name] = value * (up(rng) ? 1.2 : 0.8);
+    const BarFlight f = FlyCoax(bar, start, 3400 + draw);
+    double scale = 0;
+    const EkfResult r = RunAsTheCliDoes(f, f.declared, &scale);
+    const std::string what = "bar " + Describe(bar) + "from " + Describe(start) +
+                             "process noise x " + std::to_string(scale) + ", " +
+                             std::to_string(r.refinements) + " refinements: ";
+    ASSERT_TRUE(r.usable) << what << r.failure;
+    ASSERT_EQ(r.free_names.size(), 14u);
+    EXPECT_TRUE(r.refinement_converged) << what << r.refinement_stop;
+    ExpectWithinThreeStd(r, f.truth, what);
+    // (No NIS check: the NIS is the estimation pass's, and from 20 % off its
+    // first seconds learn the bar: 1.022 on the first draw.)
+  }
+}
+
+// Declared far off (each of the bar's parameters 40-50 % off, up or down at
+// random; generator seed 2612): the refinement may stop short (measured on
+// the shipped CoaX flight from T_b 1.0, k_b 0.3 against 1.8, 0.6: pass 1
+// 5 std short and no rise along the step), but then it says so: every
+// parameter is within 3 std of the truth or named in the report's "short of
+// the maximum".
+TEST(EkfEffectStates, FromFarOffEitherRightOrSaysItIsShortOfTheMaximum) {
+  std::mt19937_64 rng(2612);
+  std::uniform_real_distribution<double> T_b(0.5, 2.0), k_b(0.3, 1.0), d_u(0.1, 0.2), off(0.4, 0.5);
+  std::bernoulli_distribution up(0.5);
+  for (int draw = 0; draw < 2; ++draw) {
+    const std::map<std::string, double> bar = {
+        {"T_b", T_b(rng)}, {"k_b", k_b(rng)}, {"d_u", d_u(rng)}};
+    std::map<std::string, double> start;
+    for (const auto& [name, value] : bar) start[name] = value * (1 + (up(rng) ? 1 : -1) * off(rng));
+    const BarFlight f = FlyCoax(bar, start, 3500 + draw);
+    double scale = 0;
+    const EkfResult r = RunAsTheCliDoes(f, f.declared, &scale);
+    const std::string what = "bar " + Describe(bar) + "from " + Describe(start) +
+                             std::to_string(r.refinements) + " refinements, " +
+                             (r.refinement_converged ? "converged" : "short: " + r.short_of_maximum) +
+                             ": ";
+    ASSERT_TRUE(r.usable) << what << r.failure;
+    for (size_t k = 0; k < r.free_names.size(); ++k) {
+      const std::string& name = r.free_names[k];
+      const double truth = f.truth.parameters.Value(name);
+      if (std::fabs(r.estimate[k] - truth) <= 3 * r.estimate_std[k]) continue;
+      EXPECT_FALSE(r.refinement_converged) << what << name << " " << r.estimate[k] << " +- "
+                                           << r.estimate_std[k] << ", truth " << truth;
+      EXPECT_NE(r.short_of_maximum.find(name + " "), std::string::npos) << what << name;
+    }
+  }
 }
 
 TEST(EkfEffectStates, LinearisedTransitionMatchesSensitivitiesWithTheBar) {
