@@ -308,19 +308,13 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
       if (pass.ok) add_effort(pass);
       return pass;
     };
-    // The largest move of a parameter from p to `to`, in its std at p.
-    auto move_in_std = [&](const Eigen::VectorXd& p, const Eigen::VectorXd& to,
-                           const PassResult& at) {
-      const Eigen::VectorXd sd = at.P.diagonal().tail(np).cwiseMax(1e-300).cwiseSqrt();
-      return np > 0 ? (to - p).cwiseAbs().cwiseQuotient(sd).maxCoeff() : 0.0;
-    };
-    auto stepped = [&](const Eigen::VectorXd& p, const PassResult& at, double lambda,
-                       RefinementStepShape shape) {
-      return SteppedParameters(p, at.step, lambda, shape, at.P.bottomRightCorner(np, np),
-                               problem.lower, problem.upper);
-    };
+    // The largest step of a parameter, straight and within the bounds, in its
+    // std at p.
     auto largest_step = [&](const Eigen::VectorXd& p, const PassResult& at) {
-      return move_in_std(p, stepped(p, at, 1.0, RefinementStepShape::kLinear), at);
+      if (np == 0) return 0.0;
+      const Eigen::VectorXd to = (p + at.step).cwiseMax(problem.lower).cwiseMin(problem.upper);
+      const Eigen::VectorXd sd = at.P.diagonal().tail(np).cwiseMax(1e-300).cwiseSqrt();
+      return (to - p).cwiseAbs().cwiseQuotient(sd).maxCoeff();
     };
     PassResult pass2 = frozen_pass(p_final, true);
     if (!pass2.ok) return failed(pass2);
@@ -343,25 +337,18 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
         result.refinement_converged = false;
         break;
       }
-      // The step in each shape (refinement_step.h), halved while the
-      // likelihood does not rise and it still exceeds the tolerance; a shape
-      // that lands within a tenth of a std of the other is not tried again.
+      // The step (refinement_step.h), halved while the likelihood does not
+      // rise and it still exceeds the tolerance.
       bool rose = false;
       for (double lambda = 1; !rose && lambda * largest > tolerance; lambda /= 2) {
-        Eigen::VectorXd tried;
-        for (const RefinementStepShape shape :
-             {RefinementStepShape::kLogarithmic, RefinementStepShape::kLinear}) {
-          const Eigen::VectorXd to = stepped(p, at_p, lambda, shape);
-          if (tried.size() > 0 && move_in_std(tried, to, at_p) < 0.1) continue;
-          tried = to;
-          total_rows += rows_per_pass;
-          PassResult trial = frozen_pass(to, false);
-          if (trial.ok && trial.log_likelihood > at_p.log_likelihood) {
-            p = to;
-            at_p = std::move(trial);
-            rose = true;
-            break;
-          }
+        const Eigen::VectorXd to =
+            SteppedParameters(p, at_p.step, lambda, problem.lower, problem.upper);
+        total_rows += rows_per_pass;
+        PassResult trial = frozen_pass(to, false);
+        if (trial.ok && trial.log_likelihood > at_p.log_likelihood) {
+          p = to;
+          at_p = std::move(trial);
+          rose = true;
         }
       }
       if (!rose) {
@@ -384,7 +371,7 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
     covariance = pass2.P.bottomRightCorner(np, np);
     if (!result.refinement_converged) {
       // The parameters the remaining step moves by more than the tolerance.
-      const Eigen::VectorXd to = stepped(p, pass2, 1.0, RefinementStepShape::kLinear);
+      const Eigen::VectorXd to = (p + pass2.step).cwiseMax(problem.lower).cwiseMin(problem.upper);
       const Eigen::VectorXd sd = pass2.P.diagonal().tail(np).cwiseMax(1e-300).cwiseSqrt();
       std::string moved;
       for (int k = 0; k < np; ++k) {

@@ -65,9 +65,10 @@
 // prediction-error likelihood of the filter at fixed parameters, the
 // filter-error method of Maine and Iliff 1981) from pass 1's estimate. If
 // any parameter's step exceeds refine_tolerance_std of its std, the estimate
-// is not the likelihood's maximum: frozen passes at estimate + step (in two
-// shapes, refinement_step.h; halved while the likelihood does not rise and
-// the step still exceeds the tolerance) repeat until the steps are below the
+// is not the likelihood's maximum: frozen passes at estimate + step (in
+// logs where the sign is fixed, refinement_step.h; halved while the
+// likelihood does not rise and the step still exceeds the tolerance) repeat
+// until the steps are below the
 // tolerance, the likelihood stops rising, or max_refinements is spent, and
 // the covariance pass runs again at the result. A pass 1 within the
 // tolerance costs nothing more; a step of more than unconverged_step_std
@@ -178,12 +179,11 @@ struct EkfOptions {
   // along it.
   int max_refinements = 10;
   double refine_tolerance_std = 1.0;
-  // A step that does not raise the likelihood in either shape
-  // (refinement_step.h) at any length above the tolerance ends the
-  // refinement; the estimate counts as converged if that step is at most
-  // this many std (measured: 1.1-1.2 on the shipped flights; 6.2 on the CoaX
-  // flight with the bar started at T_b 1.0, k_b 0.3 against 1.8, 0.6, where
-  // pass 1 stopped 5 std short).
+  // A step that does not raise the likelihood (refinement_step.h) at any
+  // length above the tolerance ends the refinement; the estimate counts as
+  // converged if that step is at most this many std (measured: 1.1-1.2 on
+  // the shipped flights; 5.5 on the CoaX flight with the bar started at
+  // T_b 1.0, k_b 0.3 against 1.8, 0.6, where pass 1 stopped 5 std short).
   double unconverged_step_std = 3.0;
   // Re-estimate the measurement noise from the innovations (Mehra 1970:
   // R_ii = mean(nu_i^2 - (H P H^T)_ii) after the burn-in) this many times,

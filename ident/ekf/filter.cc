@@ -182,8 +182,9 @@ bool EkfFilter::Predict(int L, int k) {
   phi_.topLeftCorner(nx_, nx_) = transition_.A;
   phi_.topRightCorner(nx_, np_) = transition_.B;
   if (freeze_) {  // dz <- Phi dz
-    const Eigen::VectorXd dx = transition_.A * s_.step.head(nx_) + transition_.B * s_.step.tail(np_);
-    s_.step.head(nx_) = dx;
+    step_dx_.noalias() = transition_.A * s_.step.head(nx_);
+    step_dx_.noalias() += transition_.B * s_.step.tail(np_);
+    s_.step.head(nx_) = step_dx_;
   }
   return true;
 }
@@ -309,8 +310,8 @@ bool EkfFilter::Update(EkfTally* tally) {
       // The free filter's innovations are this one's less H dz, and it also
       // moves p by K_p nu: dz <- (I - K H) dz + [0; K_p nu] (exact for a
       // linear model).
-      const Eigen::VectorXd h_step = H_ * s_.step;
-      s_.step.noalias() -= K_ * h_step;
+      step_h_.noalias() = H_ * s_.step;
+      s_.step.noalias() -= K_ * step_h_;
       s_.step.tail(np).noalias() += K_.bottomRows(np) * nu_;
     } else {
       z.noalias() += K_ * nu_;

@@ -137,7 +137,7 @@ class EkfFilter {
   // Workspace.
   EkfTransition transition_;
   Eigen::MatrixXd H_, HP_, PHt_, S_, K_, THt_, T_;
-  Eigen::VectorXd nu_, r_diag_;
+  Eigen::VectorXd nu_, r_diag_, step_dx_, step_h_;
   Eigen::Matrix<double, kNumFlightChannels, 1> y_hat_;
   Eigen::Matrix<double, kNumFlightChannels, Eigen::Dynamic> H_model_;
   Eigen::LLT<Eigen::MatrixXd> llt_;
