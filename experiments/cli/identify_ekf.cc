@@ -103,8 +103,8 @@ void PrintEstimates(const EkfResult& r) {
   }
   if (!r.refinement_converged) {
     std::printf("  SHORT OF THE MAXIMUM of the filter's likelihood (%s): a further step would "
-                "move %s; these std do not hold. Start closer (output_error's estimates as the "
-                "config's values) or judge them with output_error.\n",
+                "move %s; these std do not hold. Judge them with output_error (or start the EKF "
+                "from its estimates).\n",
                 r.refinement_stop.c_str(), r.short_of_maximum.c_str());
   }
   for (size_t k = 0; k < r.free_names.size(); ++k) {

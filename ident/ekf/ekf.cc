@@ -16,7 +16,7 @@
 #include "dynamics/outputs.h"
 #include "ident/ekf/history_sink.h"
 #include "ident/ekf/pass.h"
-#include "ident/ekf/refinement_step.h"
+#include "ident/ekf/refinement.h"
 #include "ident/free_parameters.h"
 
 namespace coaxid {
@@ -308,88 +308,37 @@ EkfResult RunEkf(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
       if (pass.ok) add_effort(pass);
       return pass;
     };
-    // The largest step of a parameter, straight and within the bounds, in its
-    // std at p.
-    auto largest_step = [&](const Eigen::VectorXd& p, const PassResult& at) {
-      if (np == 0) return 0.0;
-      const Eigen::VectorXd to = (p + at.step).cwiseMax(problem.lower).cwiseMin(problem.upper);
-      const Eigen::VectorXd sd = at.P.diagonal().tail(np).cwiseMax(1e-300).cwiseSqrt();
-      return (to - p).cwiseAbs().cwiseQuotient(sd).maxCoeff();
-    };
     PassResult pass2 = frozen_pass(p_final, true);
     if (!pass2.ok) return failed(pass2);
-    // From p, the Gauss-Newton step of the frozen pass at p: take it (or a
-    // half, a quarter ... of it, while that still exceeds the tolerance) if
-    // the likelihood rises there.
-    Eigen::VectorXd p = p_final;
-    PassResult at_p = pass2;
-    const double tolerance = options.refine_tolerance_std;
-    double largest = largest_step(p, at_p);
-    result.step_std_at_pass1 = largest;
+    const Refinement refined =
+        Refine(p_final, pass2, options, problem.lower, problem.upper, [&](const Eigen::VectorXd& p) {
+          total_rows += rows_per_pass;
+          return frozen_pass(p, false);
+        });
+    result.refinements = refined.steps;
+    result.step_std_at_pass1 = refined.step_std_at_start;
+    result.step_std_at_estimate = refined.step_std;
+    result.refinement_converged = refined.converged;
+    result.refinement_stop = refined.stop;
     result.frozen_log_likelihood_at_pass1 = pass2.log_likelihood;
-    for (;;) {
-      if (largest <= tolerance) {
-        result.refinement_stop = "no parameter's step exceeds the tolerance";
-        break;
-      }
-      if (result.refinements == options.max_refinements) {
-        result.refinement_stop = "the refinements allowed are spent";
-        result.refinement_converged = false;
-        break;
-      }
-      // The step (refinement_step.h), halved while the likelihood does not
-      // rise and it still exceeds the tolerance.
-      bool rose = false;
-      for (double lambda = 1; !rose && lambda * largest > tolerance; lambda /= 2) {
-        const Eigen::VectorXd to =
-            SteppedParameters(p, at_p.step, lambda, problem.lower, problem.upper);
-        total_rows += rows_per_pass;
-        PassResult trial = frozen_pass(to, false);
-        if (trial.ok && trial.log_likelihood > at_p.log_likelihood) {
-          p = to;
-          at_p = std::move(trial);
-          rose = true;
-        }
-      }
-      if (!rose) {
-        result.refinement_stop = "the likelihood does not rise along the step";
-        result.refinement_converged = largest <= options.unconverged_step_std;
-        break;
-      }
-      ++result.refinements;
-      largest = largest_step(p, at_p);
-    }
-    result.step_std_at_estimate = largest;
-    if (result.refinements > 0) {
+    if (refined.steps > 0) {  // the covariance pass again, at the refined estimate
       total_rows += rows_per_pass;
-      pass2 = frozen_pass(p, true);
+      pass2 = frozen_pass(refined.p, true);
       if (!pass2.ok) return failed(pass2);
-      result.estimate = p.cwiseProduct(free.scales());
+      result.estimate = refined.p.cwiseProduct(free.scales());
       for (int k = 0; k < np; ++k) result.parameters.SetValue(free.names()[k], result.estimate[k]);
     }
     result.frozen_log_likelihood = pass2.log_likelihood;
     covariance = pass2.P.bottomRightCorner(np, np);
     if (!result.refinement_converged) {
-      // The parameters the remaining step moves by more than the tolerance.
-      const Eigen::VectorXd to = (p + pass2.step).cwiseMax(problem.lower).cwiseMin(problem.upper);
-      const Eigen::VectorXd sd = pass2.P.diagonal().tail(np).cwiseMax(1e-300).cwiseSqrt();
-      std::string moved;
-      for (int k = 0; k < np; ++k) {
-        const double in_std = (to[k] - p[k]) / sd[k];
-        if (std::fabs(in_std) <= tolerance) continue;
-        char buffer[96];
-        std::snprintf(buffer, sizeof buffer, "%s%s %+.1f std", moved.empty() ? "" : ", ",
-                      free.names()[k].c_str(), in_std);
-        moved += buffer;
-      }
-      result.short_of_maximum = moved;
+      result.short_of_maximum = LargeSteps(refined.p, pass2, options.refine_tolerance_std,
+                                           problem.lower, problem.upper, free.names());
       result.notes.push_back(
           "The estimate is short of the maximum of the filter's likelihood (" +
           result.refinement_stop + " after " + std::to_string(result.refinements) +
-          " Gauss-Newton refinements): a further step would move " + moved +
-          ". Their std describe the curvature at a point short of the maximum: start "
-          "closer (output_error's estimates as the config's values) or judge them with "
-          "output_error.");
+          " Gauss-Newton refinements): a further step would move " + result.short_of_maximum +
+          ". Their std describe the curvature at a point short of the maximum: judge them "
+          "with output_error (or start the EKF from its estimates).");
     }
   }
   if (options.progress && rows_done % options.progress_every_rows != 0) {

@@ -66,7 +66,7 @@
 // filter-error method of Maine and Iliff 1981) from pass 1's estimate. If
 // any parameter's step exceeds refine_tolerance_std of its std, the estimate
 // is not the likelihood's maximum: frozen passes at estimate + step (in
-// logs where the sign is fixed, refinement_step.h; halved while the
+// logs where the sign is fixed, refinement.h; halved while the
 // likelihood does not rise and the step still exceeds the tolerance) repeat
 // until the steps are below the
 // tolerance, the likelihood stops rising, or max_refinements is spent, and
@@ -179,7 +179,7 @@ struct EkfOptions {
   // along it.
   int max_refinements = 10;
   double refine_tolerance_std = 1.0;
-  // A step that does not raise the likelihood (refinement_step.h) at any
+  // A step that does not raise the likelihood (refinement.h) at any
   // length above the tolerance ends the refinement; the estimate counts as
   // converged if that step is at most this many std (measured: 1.1-1.2 on
   // the shipped flights; 5.5 on the CoaX flight with the bar started at

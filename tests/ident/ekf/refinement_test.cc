@@ -1,4 +1,4 @@
-// A refinement step (ident/ekf/refinement_step.h): a product of
+// A refinement step (SteppedParameters, ident/ekf/refinement.h): a product of
 // sign-keeping parameters stays put along a step that leaves it unchanged
 // to first order (the ridge k_b d_u), where the straight step leaves it; a
 // parameter whose bounds allow either sign steps straight; and the result
@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/ekf/refinement_step.h"
+#include "ident/ekf/refinement.h"
 
 namespace coaxid {
 namespace {
