@@ -230,10 +230,14 @@ json EkfReportJson(const EkfResult& r, const EkfOptions& options, const Paramete
                        "mean) from the estimation pass's estimate, until no parameter's step "
                        "exceeds tolerance_std of its std or the likelihood stops rising along "
                        "the step; largest_step_std: the largest step in std at that estimate "
-                       "and at the reported one; converged: false when max_steps stopped it"},
+                       "and at the reported one; converged: false when max_steps stopped it, "
+                       "or a step above unconverged_step_std that does not raise the "
+                       "likelihood (short_of_maximum: the parameters it would move)"},
         {"steps", r.refinements},
         {"max_steps", options.max_refinements},
         {"tolerance_std", options.refine_tolerance_std},
+        {"unconverged_step_std", options.unconverged_step_std},
+        {"short_of_maximum", r.short_of_maximum},
         {"largest_step_std", {{"estimation_pass", Number(r.step_std_at_pass1)},
                               {"reported", Number(r.step_std_at_estimate)}}},
         {"log_likelihood", {{"estimation_pass", Number(r.frozen_log_likelihood_at_pass1)},
