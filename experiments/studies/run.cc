@@ -1,5 +1,6 @@
 #include "experiments/studies/run.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/errors.h"
@@ -64,14 +65,44 @@ nlohmann::json LinearKf(const Vehicle& start, const Vehicle& truth, const RunLog
   return {{"ok", true}, {"parameters", p}};
 }
 
-nlohmann::json IdentifiabilityParameters(const ParameterSet& estimates,
-                                         const IdentifiabilityReport& id, const Vehicle& truth) {
+// The truth an estimate is judged against. Flight logs alone fix only the
+// scale-free ratios; a fit that held d for the scale (model.md decision 8)
+// reports every member of the scale group on the held scale, so its truth
+// is the truth moved along the scale line onto the held d: each member times
+// d_held / d_truth (every member scales as the common factor, scale_gauge.h).
+// Marked "truth_on_held_scale" in the record.
+nlohmann::json JudgedTruth(const ScaleGauge& gauge, const ParameterSet& estimates,
+                           const Vehicle& truth, const std::string& name, bool* on_held_scale) {
+  *on_held_scale = false;
+  const nlohmann::json t = Truth(truth, name);
+  if (gauge.held.empty() || t.is_null() || !truth.parameters.Has(gauge.held) ||
+      std::find(gauge.group.begin(), gauge.group.end(), name) == gauge.group.end()) {
+    return t;
+  }
+  *on_held_scale = true;
+  return Number(t.get<double>() * estimates.Value(gauge.held) / truth.parameters.Value(gauge.held));
+}
+
+nlohmann::json ParametersOnScale(const std::vector<std::string>& names,
+                                 const Eigen::VectorXd& estimate, const Eigen::VectorXd& stds,
+                                 const std::vector<bool>& identifiable, const ScaleGauge& gauge,
+                                 const ParameterSet& estimates, const Vehicle& truth) {
   nlohmann::json p = nlohmann::json::object();
-  for (size_t k = 0; k < id.names.size(); ++k) {
-    p[id.names[k]] = Entry(estimates.Value(id.names[k]), id.std[k], id.identifiable[k],
-                           Truth(truth, id.names[k]));
+  for (size_t k = 0; k < names.size(); ++k) {
+    bool on_held_scale = false;
+    p[names[k]] = Entry(estimate[k], stds[k], identifiable[k],
+                        JudgedTruth(gauge, estimates, truth, names[k], &on_held_scale));
+    if (on_held_scale) p[names[k]]["truth_on_held_scale"] = true;
   }
   return p;
+}
+
+nlohmann::json IdentifiabilityParameters(const ParameterSet& estimates,
+                                         const IdentifiabilityReport& id, const ScaleGauge& gauge,
+                                         const Vehicle& truth) {
+  Eigen::VectorXd values(id.names.size());
+  for (size_t k = 0; k < id.names.size(); ++k) values[k] = estimates.Value(id.names[k]);
+  return ParametersOnScale(id.names, values, id.std, id.identifiable, gauge, estimates, truth);
 }
 
 // The scale-free ratios (ident/scale_gauge.h) as more entries of a record's
@@ -93,7 +124,7 @@ nlohmann::json OutputError(const StudySpec& spec, const Vehicle& start, const Ve
                            const RunLogs& logs) {
   const OutputErrorResult r = FitOutputError(start, logs.all, FitOptions(spec));
   if (!r.usable) return {{"ok", false}, {"error", r.why_not_usable}};
-  nlohmann::json p = IdentifiabilityParameters(r.parameters, r.identifiability, truth);
+  nlohmann::json p = IdentifiabilityParameters(r.parameters, r.identifiability, r.gauge, truth);
   AddRatios(r.ratios, r.parameters, truth, &p);
   return {{"ok", true}, {"parameters", p}};
 }
@@ -105,11 +136,8 @@ nlohmann::json Ekf(const Vehicle& start, const Vehicle& truth, const RunLogs& lo
   const EkfResult r =
       RunEkf(start, logs.flight_estimation, NoiseFromData(logs.flight_estimation), o);
   if (!r.usable) return {{"ok", false}, {"error", r.failure}};
-  nlohmann::json p = nlohmann::json::object();
-  for (size_t k = 0; k < r.free_names.size(); ++k) {
-    p[r.free_names[k]] =
-        Entry(r.estimate[k], r.estimate_std[k], r.identifiable[k], Truth(truth, r.free_names[k]));
-  }
+  nlohmann::json p = ParametersOnScale(r.free_names, r.estimate, r.estimate_std, r.identifiable, r.gauge,
+                                       r.parameters, truth);
   AddRatios(r.ratios, r.parameters, truth, &p);
   return {{"ok", true}, {"parameters", p}};
 }
@@ -125,8 +153,8 @@ nlohmann::json DiscoverRun(const StudySpec& spec, const Vehicle& start, const Ve
   const DiscoveryResult r = Discover(start, logs.all, logs.held_out, o);
   nlohmann::json unexplained = nlohmann::json::array();
   for (const UnexplainedChannel& u : r.unexplained) unexplained.push_back(u.channel);
-  nlohmann::json p = IdentifiabilityParameters(r.final.result.parameters,
-                                               r.final.result.identifiability, truth);
+  nlohmann::json p = IdentifiabilityParameters(
+      r.final.result.parameters, r.final.result.identifiability, r.final.result.gauge, truth);
   AddRatios(r.final.result.ratios, r.final.result.parameters, truth, &p);
   // How far the declared model misses: the largest channel rms over its
   // sample-to-sample noise (an effect too weak to raise it is invisible to

@@ -164,6 +164,16 @@ nlohmann::json CandidateScore::ToJson() const {
   if (!testable) j["why_not_testable"] = why_not_testable;
   j["blind_at_bounds"] = blind_at_bounds;
   if (!restart_values.empty()) j["restart_values"] = restart_values;
+  if (!refit_starts.empty()) {
+    nlohmann::json starts = nlohmann::json::array();
+    for (const RefitStart& r : refit_starts) {
+      starts.push_back({{"from", r.from},
+                        {"weighted_rss", std::isfinite(r.weighted_rss) ? nlohmann::json(r.weighted_rss)
+                                                                      : nlohmann::json(nullptr)},
+                        {"kept", r.kept}});
+    }
+    j["refit_starts"] = starts;
+  }
   if (testable) {
     j["linearised_estimates"] = linearised_estimates;
     j["beyond_linear_range"] = beyond_linear_range;
@@ -365,15 +375,28 @@ bool ReachesAny(const std::vector<std::string>& channels, const std::vector<std:
 // an undeclared swashplate bias, low flight, flight only, sigma0 and Cy at
 // bounds: the passing swashplate_bias refitted from there stayed
 // insignificant, from the config values it is found).
+std::map<std::string, double> ConfigValuesOfParametersAtBounds(const ParameterSet& fit,
+                                                               const Vehicle& declared) {
+  std::map<std::string, double> out;
+  for (const std::string& name : ParametersAtBounds(fit)) {
+    if (!declared.parameters.Has(name)) continue;  // an added effect's parameter
+    const Parameter& p = fit.Get(name);
+    const double config = declared.parameters.Value(name);
+    if (config > p.lower && config < p.upper) out[name] = config;
+  }
+  return out;
+}
+
 void MarkRestartsAtBounds(const Vehicle& fitted, const Vehicle& declared,
                           const std::map<std::string, std::vector<std::string>>& distorted,
                           const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
                           std::vector<CandidateScore>* scores) {
+  const std::map<std::string, double> configs =
+      ConfigValuesOfParametersAtBounds(fitted.parameters, declared);
   for (const auto& [name, channels] : distorted) {
-    if (!declared.parameters.Has(name)) continue;  // an added effect's parameter
-    const Parameter& p = fitted.parameters.Get(name);
-    const double config = declared.parameters.Value(name);
-    if (!(config > p.lower && config < p.upper)) continue;
+    const auto at = configs.find(name);
+    if (at == configs.end()) continue;
+    const double config = at->second;
     Vehicle inside = fitted;
     inside.parameters.SetValue(name, config);
     for (CandidateScore& s : *scores) {
@@ -414,29 +437,29 @@ OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<Estimation
   return refit;
 }
 
-bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
-                    const OutputErrorOptions& fit_options, CandidateScore* score,
-                    OutputErrorResult* refit, CandidatePass* next) {
-  score->refitted = true;
-  Vehicle candidate = CandidateVehicle(pass.fitted, score->effect);
-  // Start at the Gauss-Newton step (inside the bounds). A one-sided
-  // parameter (absent at its bound: k_ge, J_r, k_T >= 0) whose step points
-  // out of the bounds would start pinned at absence, where a bounded solver
-  // need not leave it (measured: an undeclared ground effect's k_ge stayed
-  // at 0 while Cz sat at its bound): it starts at the library's typical
-  // strength instead.
-  // A candidate whose refit restarts declared parameters at a bound
-  // (restart_values) has no step to start from: blind at the bounds, its
-  // columns vanish there; otherwise the step was taken at the distorted
-  // point. It starts at absence, one-sided parameters at typical.
-  const bool restarts = !score->restart_values.empty();
-  const auto& specs = EffectLibrary()[EffectIndex(score->effect)].parameters;
+namespace {
+
+// Where a candidate's refit starts: the effect at its Gauss-Newton step
+// (inside the bounds) and every other parameter at the current fit; or, with
+// declared parameters restarted (`restarts`, config values), the effect at
+// absence. A one-sided parameter (absent at its bound: k_ge, J_r, k_T >= 0)
+// whose step points out of the bounds, or that starts at absence, would start
+// pinned there, where a bounded solver need not leave it (measured: an
+// undeclared ground effect's k_ge stayed at 0 while Cz sat at its bound): it
+// starts at the library's typical strength instead. A candidate whose refit
+// restarts declared parameters has no step to start from: blind at the
+// bounds, its columns vanish there; otherwise the step was taken at the
+// distorted point.
+Vehicle CandidateStart(const CandidatePass& pass, const CandidateScore& score,
+                       const std::map<std::string, double>& restarts, bool from_step) {
+  Vehicle candidate = CandidateVehicle(pass.fitted, score.effect);
+  const auto& specs = EffectLibrary()[EffectIndex(score.effect)].parameters;
   for (const auto& spec : specs) {
-    const std::string name = score->effect + "." + spec.name;
-    const auto it = score->linearised_estimates.find(name);
-    if (it == score->linearised_estimates.end() && !restarts) continue;
+    const std::string name = score.effect + "." + spec.name;
+    const auto it = score.linearised_estimates.find(name);
+    if (from_step && it == score.linearised_estimates.end()) continue;
     const Parameter& p = candidate.parameters.Get(name);
-    const double step = restarts ? p.value : it->second;
+    const double step = from_step ? it->second : p.value;
     // A lag linearised beside absence (linearise_at) is one-sided too.
     const bool absent_at_lower = p.value == p.lower || std::isfinite(spec.linearise_at);
     const bool pinned_at_absence =
@@ -444,22 +467,87 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
     candidate.parameters.SetValue(
         name, pinned_at_absence ? std::clamp(std::fabs(spec.typical), p.lower, p.upper) : step);
   }
-  for (const auto& [name, value] : score->restart_values) candidate.parameters.SetValue(name, value);
+  for (const auto& [name, value] : restarts) candidate.parameters.SetValue(name, value);
+  return candidate;
+}
+
+std::string StartText(const std::map<std::string, double>& restarts, bool from_step) {
+  if (from_step) return "its linearised step, the rest at the current fit";
+  std::string names;
+  for (const auto& [name, value] : restarts) names += (names.empty() ? "" : ", ") + name;
+  return names.empty() ? "absence, the rest at the current fit"
+                       : "absence, " + names + " at the config values";
+}
+
+bool OwnParameterAtBound(const std::string& effect, const ParameterSet& parameters) {
+  const std::vector<std::string> names = EffectParameterNames(effect);
+  for (const std::string& name : ParametersAtBounds(parameters)) {
+    if (std::find(names.begin(), names.end(), name) != names.end()) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
+                    const OutputErrorOptions& fit_options,
+                    const std::map<std::string, double>& declared_at_bounds,
+                    CandidateScore* score, OutputErrorResult* refit, CandidatePass* next) {
+  score->refitted = true;
   // The other parameters start at the current fit, every declared one free
   // (a bound the declared fit pressed one against may let go). Restarted
   // ones are far from it: the whole coarse-to-fine schedule (measured: an
   // undeclared CG offset, d and Iyy restarted from their bounds, 1 s segments
   // alone stopped at cg_offset = 0 and 7 x the declared fit's excess; the
   // schedule finds the truth).
-  *refit = WarmRefit(candidate, logs, fit_options, pass.fit.noise, restarts);
+  const bool restarts = !score->restart_values.empty();
+  *refit = WarmRefit(CandidateStart(pass, *score, score->restart_values, !restarts), logs,
+                     fit_options, pass.fit.noise, restarts);
+  int n1 = 0;
+  double rss = refit->usable ? WeightedRss(logs, refit->predictions, pass.fit.noise, &n1) : INFINITY;
+  score->refit_starts.push_back({StartText(score->restart_values, !restarts), rss, true});
+  // The candidate's model holds the current one (at absence it is the
+  // current fit): a refit that ends above the current fit's weighted RSS is
+  // short of its optimum, not a sign that the effect is absent (measured,
+  // undeclared CG offset, flight only: the refit with Iyy restarted ended
+  // 0.2 % of the excess worse than the declared fit and was rejected as
+  // insignificant). Nor is a refit that ends with the effect at a bound
+  // while declared parameters sit at theirs conclusive (measured, undeclared
+  // stabilizer bar and swashplate bias, flight only: Ixx and Iyy at their
+  // upper bounds, the bar's refit from there ended at T_b = 10). Either way
+  // the refit runs again from the other start (restarted at the config
+  // values <-> at the current fit) and the lower weighted RSS is kept.
+  const double rss_current = WeightedRss(logs, pass.fit.predictions, pass.fit.noise, &n1);
+  const bool above_current =
+      !(rss <= rss_current * (1 + 10 * fit_options.function_tolerance));
+  const bool at_bound_beside_bounds = refit->usable && !declared_at_bounds.empty() &&
+                                      OwnParameterAtBound(score->effect, refit->parameters);
+  if (above_current || at_bound_beside_bounds) {
+    const std::map<std::string, double> other = restarts ? std::map<std::string, double>()
+                                                         : declared_at_bounds;
+    // From a restart, the other start is the linearised step at the fit;
+    // from the step, the declared parameters at bounds restarted (or, with
+    // none, the effect at absence).
+    OutputErrorResult second = WarmRefit(CandidateStart(pass, *score, other, restarts), logs,
+                                         fit_options, pass.fit.noise, !other.empty());
+    const double rss2 =
+        second.usable ? WeightedRss(logs, second.predictions, pass.fit.noise, &n1) : INFINITY;
+    const bool better = rss2 < rss;
+    score->refit_starts.back().kept = !better;
+    score->refit_starts.push_back({StartText(other, restarts), rss2, better});
+    if (better) {
+      *refit = std::move(second);
+      rss = rss2;
+    }
+  }
   if (!refit->usable) {
     score->why_not_confirmed = "the joint refit failed: " + refit->why_not_usable;
     return false;
   }
+  Vehicle candidate = CandidateVehicle(pass.fitted, score->effect);
   score->parameters = refit->parameters;
   score->identifiability = refit->identifiability;
-  int n1 = 0;
-  score->rss_after = WeightedRss(logs, refit->predictions, pass.fit.noise, &n1);
+  score->rss_after = rss;
   const std::vector<std::string> names = EffectParameterNames(score->effect);
   for (const std::string& name : ParametersAtBounds(refit->parameters)) {
     if (std::find(names.begin(), names.end(), name) == names.end()) continue;

@@ -46,6 +46,13 @@
 
 namespace coaxid {
 
+// One start of a candidate's refit (RefitCandidate) and where it ended.
+struct RefitStart {
+  std::string from;     // e.g. "its linearised step, the rest at the current fit"
+  double weighted_rss;  // at the current fit's noise weights; inf: the refit failed
+  bool kept;
+};
+
 struct CandidateScore {
   std::string effect, description;
   int round = 0;                      // loop round (1 = against the declared model)
@@ -82,6 +89,9 @@ struct CandidateScore {
   // its refit starts them at these (config) values, and the candidate at
   // absence (one-sided parameters at typical).
   std::map<std::string, double> restart_values;
+  // The refit's starts: one, or two when the first ended above the current
+  // fit's weighted RSS or at a bound beside declared parameters at theirs.
+  std::vector<RefitStart> refit_starts;
   // The refit (shortlisted candidates): joint refit, Wald test.
   bool refitted = false;
   double wald_statistic = 0, wald_p_value = 1;
@@ -112,6 +122,12 @@ struct CandidateScore {
 
 // Whether any of `channels` is in `of`.
 bool ReachesAny(const std::vector<std::string>& channels, const std::vector<std::string>& of);
+
+// The declared parameters `fit` left at a bound whose config value (in
+// `declared`) lies inside the bounds, with that value: where a restart
+// starts them.
+std::map<std::string, double> ConfigValuesOfParametersAtBounds(const ParameterSet& fit,
+                                                               const Vehicle& declared);
 
 // Which declared parameters the current fit (`fitted`) left at a bound each
 // candidate's refit restarts at its value in `declared` (the config)
@@ -178,14 +194,20 @@ OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<Estimation
                             bool coarse_to_fine = false);
 
 // Refits `score.effect` jointly into the pass's model (starting at its
-// linearised estimates, noise weights of the current fit) and tests its
-// parameters at the refit (cluster-robust Wald). Fills the score's refit
-// fields (Wald, estimates, plausibility); on success returns the refit in
-// *refit and the pass at the refit (the next round's scoring pass, if it is
-// accepted) in *next. False, with why_not_confirmed, when the refit or the
-// test fails.
+// linearised estimates, or at absence with score.restart_values restarted;
+// noise weights of the current fit) and tests its parameters at the refit
+// (cluster-robust Wald). A refit that ends above the current fit's weighted
+// RSS (its model holds the current one, so it stopped short), or with a
+// parameter of the effect at a bound while declared parameters sit at theirs
+// (`declared_at_bounds`: their config values), runs again from the other
+// start (restarted <-> at the current fit) and the lower weighted RSS is
+// kept (score.refit_starts). Fills the score's refit fields (Wald, estimates,
+// plausibility); on success returns the refit in *refit and the pass at the
+// refit (the next round's scoring pass, if it is accepted) in *next. False,
+// with why_not_confirmed, when the refit or the test fails.
 bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
-                    const OutputErrorOptions& fit_options, CandidateScore* score,
-                    OutputErrorResult* refit, CandidatePass* next);
+                    const OutputErrorOptions& fit_options,
+                    const std::map<std::string, double>& declared_at_bounds,
+                    CandidateScore* score, OutputErrorResult* refit, CandidatePass* next);
 
 }  // namespace coaxid

@@ -124,11 +124,7 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
   Vehicle restarted = model;
   restarted.parameters = fit.parameters;
   std::string names;
-  for (const std::string& name : ParametersAtBounds(fit.parameters)) {
-    if (!declared.parameters.Has(name)) continue;  // an added effect's parameter
-    const Parameter& p = fit.parameters.Get(name);
-    const double config = declared.parameters.Value(name);
-    if (!(config > p.lower && config < p.upper)) continue;
+  for (const auto& [name, config] : ConfigValuesOfParametersAtBounds(fit.parameters, declared)) {
     restarted.parameters.SetValue(name, config);
     names += (names.empty() ? "" : ", ") + name;
   }
@@ -204,6 +200,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
                                             const std::vector<EstimationLog>& estimation,
                                             const std::vector<EstimationLog>& validation,
                                             const ModelSnapshot& now, const std::vector<int>& shortlist,
+                                            const std::map<std::string, double>& declared_at_bounds,
                                             std::vector<CandidateScore>* scores,
                                             const DiscoveryOptions& o, Clock::time_point start) {
   const int n = static_cast<int>(shortlist.size());
@@ -221,7 +218,9 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
     OutputErrorResult refit;
-    if (!RefitCandidate(pass, estimation, fit, &s, &refit, &refits[k].next)) return;
+    if (!RefitCandidate(pass, estimation, fit, declared_at_bounds, &s, &refit, &refits[k].next)) {
+      return;
+    }
     Vehicle v = refits[k].next.fitted;
     refits[k].snapshot = Snapshot(v, refit, estimation, validation, o);
     const ExcessShare est = ShareOfExcessRemoved(now.fit, refits[k].snapshot.fit,
@@ -288,6 +287,15 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
                   s.share_of_excess_held_out, s.confirmed ? "qualifies" : "rejected: ",
                   s.why_not_confirmed.c_str());
     Say(o, line);
+    if (s.refit_starts.size() > 1) {
+      std::string starts;
+      for (const RefitStart& r : s.refit_starts) {
+        starts += (starts.empty() ? "" : "; ") + r.from + ": weighted RSS " +
+                  NumberText(r.weighted_rss, "%.6g") + (r.kept ? " (kept)" : "");
+      }
+      Say(o, "    two starts (the first ended above the current fit or at a bound beside "
+             "declared parameters at theirs): " + starts);
+    }
   }
   return refits;
 }
@@ -512,8 +520,9 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                                             : " acts on channels that " + names + " distort") +
                          ": its refit restarts them at the config values");
       }
-      std::vector<CandidateRefit> refits = RefitInParallel(pass, estimation, validation, now,
-                                                           shortlist, &scores, o, start);
+      std::vector<CandidateRefit> refits = RefitInParallel(
+          pass, estimation, validation, now, shortlist,
+          ConfigValuesOfParametersAtBounds(pass.fit.parameters, declared), &scores, o, start);
       int best = -1;
       for (size_t k = 0; k < refits.size(); ++k) {
         const CandidateScore& s = scores[shortlist[k]];
