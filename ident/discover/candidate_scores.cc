@@ -168,6 +168,7 @@ nlohmann::json CandidateScore::ToJson() const {
     nlohmann::json starts = nlohmann::json::array();
     for (const RefitStart& r : refit_starts) {
       starts.push_back({{"from", r.from},
+                        {"cost", std::isfinite(r.cost) ? nlohmann::json(r.cost) : nlohmann::json(nullptr)},
                         {"weighted_rss", std::isfinite(r.weighted_rss) ? nlohmann::json(r.weighted_rss)
                                                                       : nlohmann::json(nullptr)},
                         {"kept", r.kept}});
@@ -420,11 +421,16 @@ void MarkRestartsAtBounds(const Vehicle& fitted, const Vehicle& declared,
 }
 
 OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
-                            const OutputErrorOptions& fit_options, const NoiseWeights& noise,
-                            bool coarse_to_fine) {
+                            const OutputErrorOptions& fit_options, const Vehicle& current,
+                            const OutputErrorResult& current_fit, bool coarse_to_fine) {
   OutputErrorOptions o = fit_options;
-  o.noise = noise;
-  if (!coarse_to_fine) o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
+  o.noise = current_fit.noise;
+  o.noise_relaxations = 0;
+  if (!coarse_to_fine) {
+    o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
+    o.start_segments = current_fit.segments;
+    o.start_segment_state_names = current.model.StateNames();
+  }
   OutputErrorResult refit = FitOutputError(vehicle, logs, o);
   if (!refit.usable && refit.scale_move_failed) {
     // Flight-only: the solve drifted along the scale line, out of the
@@ -502,24 +508,29 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
   // schedule finds the truth).
   const bool restarts = !score->restart_values.empty();
   *refit = WarmRefit(CandidateStart(pass, *score, score->restart_values, !restarts), logs,
-                     fit_options, pass.fit.noise, restarts);
+                     fit_options, pass.fitted, pass.fit, restarts);
   int n1 = 0;
-  double rss = refit->usable ? WeightedRss(logs, refit->predictions, pass.fit.noise, &n1) : INFINITY;
-  score->refit_starts.push_back({StartText(score->restart_values, !restarts), rss, true});
+  auto start_of = [&](const OutputErrorResult& r, const std::string& from) {
+    return RefitStart{from, r.usable ? r.final_cost : INFINITY,
+                      r.usable ? WeightedRss(logs, r.predictions, pass.fit.noise, &n1) : INFINITY,
+                      true};
+  };
+  score->refit_starts.push_back(start_of(*refit, StartText(score->restart_values, !restarts)));
   // The candidate's model holds the current one (at absence it is the
-  // current fit): a refit that ends above the current fit's weighted RSS is
-  // short of its optimum, not a sign that the effect is absent (measured,
-  // undeclared CG offset, flight only: the refit with Iyy restarted ended
-  // 0.2 % of the excess worse than the declared fit and was rejected as
-  // insignificant). Nor is a refit that ends with the effect at a bound
-  // while declared parameters sit at theirs conclusive (measured, undeclared
-  // stabilizer bar and swashplate bias, flight only: Ixx and Iyy at their
-  // upper bounds, the bar's refit from there ended at T_b = 10). Either way
-  // the refit runs again from the other start (restarted at the config
-  // values <-> at the current fit) and the lower weighted RSS is kept.
-  const double rss_current = WeightedRss(logs, pass.fit.predictions, pass.fit.noise, &n1);
-  const bool above_current =
-      !(rss <= rss_current * (1 + 10 * fit_options.function_tolerance));
+  // current fit), and the refit minimises the same objective at the same
+  // weights (output and continuity residuals): one that ends above the
+  // current fit's objective is short of its optimum, not a sign that the
+  // effect is absent (measured, undeclared CG offset, flight only: the
+  // refit with Iyy restarted ended 0.2 % of the excess worse than the
+  // declared fit and was rejected as insignificant). Nor is a refit that
+  // ends with the effect at a bound while declared parameters sit at theirs
+  // conclusive (measured, undeclared stabilizer bar and swashplate bias,
+  // flight only: Ixx and Iyy at their upper bounds, the bar's refit from
+  // there ended at T_b = 10). Either way the refit runs again from the other
+  // start (restarted at the config values <-> at the current fit) and the
+  // lower objective is kept.
+  const bool above_current = !(score->refit_starts.back().cost <=
+                               pass.fit.final_cost * (1 + 10 * fit_options.function_tolerance));
   const bool at_bound_beside_bounds = refit->usable && !declared_at_bounds.empty() &&
                                       OwnParameterAtBound(score->effect, refit->parameters);
   if (above_current || at_bound_beside_bounds) {
@@ -527,18 +538,18 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
                                                          : declared_at_bounds;
     // From a restart, the other start is the linearised step at the fit;
     // from the step, the declared parameters at bounds restarted (or, with
-    // none, the effect at absence).
+    // none, the effect at absence: exactly the current fit).
     OutputErrorResult second = WarmRefit(CandidateStart(pass, *score, other, restarts), logs,
-                                         fit_options, pass.fit.noise, !other.empty());
-    const double rss2 =
-        second.usable ? WeightedRss(logs, second.predictions, pass.fit.noise, &n1) : INFINITY;
-    const bool better = rss2 < rss;
-    score->refit_starts.back().kept = !better;
-    score->refit_starts.push_back({StartText(other, restarts), rss2, better});
-    if (better) {
-      *refit = std::move(second);
-      rss = rss2;
-    }
+                                         fit_options, pass.fitted, pass.fit, !other.empty());
+    RefitStart s2 = start_of(second, StartText(other, restarts));
+    s2.kept = s2.cost < score->refit_starts.back().cost;
+    score->refit_starts.back().kept = !s2.kept;
+    score->refit_starts.push_back(s2);
+    if (s2.kept) *refit = std::move(second);
+  }
+  double rss = INFINITY;
+  for (const RefitStart& r : score->refit_starts) {
+    if (r.kept) rss = r.weighted_rss;
   }
   if (!refit->usable) {
     score->why_not_confirmed = "the joint refit failed: " + refit->why_not_usable;

@@ -49,7 +49,8 @@ namespace coaxid {
 // One start of a candidate's refit (RefitCandidate) and where it ended.
 struct RefitStart {
   std::string from;     // e.g. "its linearised step, the rest at the current fit"
-  double weighted_rss;  // at the current fit's noise weights; inf: the refit failed
+  double cost;          // the fit's objective (output and continuity residuals); inf: failed
+  double weighted_rss;  // of the outputs, at the current fit's noise weights
   bool kept;
 };
 
@@ -90,7 +91,7 @@ struct CandidateScore {
   // absence (one-sided parameters at typical).
   std::map<std::string, double> restart_values;
   // The refit's starts: one, or two when the first ended above the current
-  // fit's weighted RSS or at a bound beside declared parameters at theirs.
+  // fit's objective or at a bound beside declared parameters at theirs.
   std::vector<RefitStart> refit_starts;
   // The refit (shortlisted candidates): joint refit, Wald test.
   bool refitted = false;
@@ -183,25 +184,29 @@ std::vector<std::string> ChannelsReachedBy(const Vehicle& vehicle,
                                            const NoiseWeights& noise);
 
 
-// A fit of `vehicle` from its current values at the final segment length
-// (a refit near a solution), or, coarse_to_fine, through the fit's whole
-// segment schedule (a refit with parameters restarted away from the current
-// fit: from there the final length alone stopped in a wrong minimum), with
-// the given noise weights; with the scale held in the solve when moving it
-// onto the held member fails.
+// A fit of `vehicle` near the current fit (`current`, fitted as
+// `current_fit`), at the current fit's noise weights, kept (no relaxation:
+// the loop compares every refit with the current fit at those weights).
+// Either from its values at the final segment length, each segment starting
+// at the current fit's trajectory (a model nested in `vehicle` from the
+// current fit's values then starts exactly at the current fit), or,
+// coarse_to_fine, through the fit's whole segment schedule from the
+// measurements (a refit with parameters restarted away from the current fit:
+// from there the final length alone stopped in a wrong minimum). With the
+// scale held in the solve when moving it onto the held member fails.
 OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
-                            const OutputErrorOptions& fit_options, const NoiseWeights& noise,
-                            bool coarse_to_fine = false);
+                            const OutputErrorOptions& fit_options, const Vehicle& current,
+                            const OutputErrorResult& current_fit, bool coarse_to_fine = false);
 
 // Refits `score.effect` jointly into the pass's model (starting at its
 // linearised estimates, or at absence with score.restart_values restarted;
 // noise weights of the current fit) and tests its parameters at the refit
-// (cluster-robust Wald). A refit that ends above the current fit's weighted
-// RSS (its model holds the current one, so it stopped short), or with a
+// (cluster-robust Wald). A refit that ends above the current fit's objective
+// (its model holds the current one, so it stopped short), or with a
 // parameter of the effect at a bound while declared parameters sit at theirs
 // (`declared_at_bounds`: their config values), runs again from the other
-// start (restarted <-> at the current fit) and the lower weighted RSS is
-// kept (score.refit_starts). Fills the score's refit fields (Wald, estimates,
+// start (restarted <-> at the current fit) and the lower objective is kept
+// (score.refit_starts). Fills the score's refit fields (Wald, estimates,
 // plausibility); on success returns the refit in *refit and the pass at the
 // refit (the next round's scoring pass, if it is accepted) in *next. False,
 // with why_not_confirmed, when the refit or the test fails.

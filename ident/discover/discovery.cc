@@ -78,7 +78,8 @@ struct CandidateRefit {
 };
 
 // Continues a fit that stopped at the loop's iteration cap, at most three
-// more solves at the final segment length and the same noise weights: a
+// more solves at the final segment length and the same noise weights, each
+// from the fit's parameters and trajectory (WarmRefit): a
 // candidate's refit judged against an unconverged fit is credited with the
 // iterations, not the effect (measured, cg_offset truth, flight only: with
 // cg_offset added after 20 iterations, the refits of wind and
@@ -87,20 +88,41 @@ struct CandidateRefit {
 OutputErrorResult Converged(const Vehicle& model, OutputErrorResult fit,
                             const std::vector<EstimationLog>& logs,
                             const OutputErrorOptions& fit_options, const DiscoveryOptions& options) {
-  OutputErrorOptions o = fit_options;
-  o.noise = fit.noise;
-  o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
-  o.noise_relaxations = 0;
+  Vehicle v = model;
   for (int k = 0; k < 3 && fit.hit_iteration_limit; ++k) {
-    Say(options, "discover: the fit stopped at its " + std::to_string(o.max_iterations) +
+    Say(options, "discover: the fit stopped at its " + std::to_string(fit_options.max_iterations) +
                      " iterations: continuing it");
-    Vehicle v = model;
     v.parameters = fit.parameters;
-    OutputErrorResult next = FitOutputError(v, logs, o);
+    OutputErrorResult next = WarmRefit(v, logs, fit_options, v, fit);
     if (!next.usable) break;
     fit = std::move(next);
   }
   return fit;
+}
+
+// The noise weights of a model with an effect just added: the candidates'
+// refits kept the current fit's (every comparison is made at them), which
+// the missing effect inflated in its channels; the new model re-estimates
+// them once from its residuals and is solved again (an output-error
+// relaxation, as the declared fit's), warm from its fit. True if *fit was
+// replaced (not when the weights move by less than the relaxation
+// tolerance).
+bool Reweighted(const Vehicle& model, const std::vector<EstimationLog>& logs,
+                const OutputErrorOptions& fit_options, OutputErrorResult* fit) {
+  if (fit_options.noise_relaxations < 1) return false;
+  OutputErrorOptions o = fit_options;
+  o.noise = fit->noise;
+  o.noise_relaxations = 1;
+  o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
+  o.start_segments = fit->segments;
+  o.start_segment_state_names = model.model.StateNames();
+  Vehicle v = model;
+  v.parameters = fit->parameters;
+  OutputErrorResult relaxed = FitOutputError(v, logs, o);
+  // Weights that moved less than the tolerance were not applied: no change.
+  if (!relaxed.usable || relaxed.noise.std == fit->noise.std) return false;
+  *fit = std::move(relaxed);
+  return true;
 }
 
 // A declared fit that left parameters at a bound may sit in a wrong basin
@@ -130,7 +152,7 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
   }
   if (names.empty()) return fit;
   Say(options, "discover: the fit left " + names + " at a bound: refitting from their config values");
-  OutputErrorResult refit = WarmRefit(restarted, logs, fit_options, fit.noise, true);
+  OutputErrorResult refit = WarmRefit(restarted, logs, fit_options, model, fit, true);
   if (!refit.usable) return fit;
   int n = 0;
   const double before = WeightedRss(logs, fit.predictions, fit.noise, &n);
@@ -290,11 +312,12 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     if (s.refit_starts.size() > 1) {
       std::string starts;
       for (const RefitStart& r : s.refit_starts) {
-        starts += (starts.empty() ? "" : "; ") + r.from + ": weighted RSS " +
-                  NumberText(r.weighted_rss, "%.6g") + (r.kept ? " (kept)" : "");
+        starts += (starts.empty() ? "" : "; ") + r.from + ": cost " +
+                  NumberText(r.cost, "%.6g") + (r.kept ? " (kept)" : "");
       }
-      Say(o, "    two starts (the first ended above the current fit or at a bound beside "
-             "declared parameters at theirs): " + starts);
+      Say(o, "    two starts (the first ended above the current fit's cost " +
+                 NumberText(pass.fit.final_cost, "%.6g") +
+                 " or at a bound beside declared parameters at theirs): " + starts);
     }
   }
   return refits;
@@ -371,7 +394,7 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
     const bool itself = i + 1 == out->added.size();
     const auto t0 = Clock::now();
     const Vehicle without = WithoutEffect(pass->fitted, effect);
-    const OutputErrorResult fit = WarmRefit(without, estimation, o.fit, pass->fit.noise);
+    const OutputErrorResult fit = WarmRefit(without, estimation, o.fit, pass->fitted, pass->fit);
     if (!fit.usable) continue;  // keep it: nothing to judge against
     Vehicle refitted = without;
     refitted.parameters = fit.parameters;
@@ -538,12 +561,14 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                          NumberText(100 * s.share_of_excess, "%.0f") + " % of its channels' excess error)");
         pass = std::move(refits[best].next);
         now = std::move(refits[best].snapshot);
-        if (pass.fit.hit_iteration_limit) {
-          const OutputErrorResult fit = Converged(pass.fitted, pass.fit, estimation, o.fit, options);
+        bool refitted = pass.fit.hit_iteration_limit;
+        OutputErrorResult settled = Converged(pass.fitted, pass.fit, estimation, o.fit, options);
+        refitted |= Reweighted(pass.fitted, estimation, o.fit, &settled);
+        if (refitted) {
           Vehicle v = pass.fitted;
-          v.parameters = fit.parameters;
-          pass = LinearisePass(v, fit, estimation, o.fit);
-          now = Snapshot(v, fit, estimation, validation, options);
+          v.parameters = settled.parameters;
+          pass = LinearisePass(v, settled, estimation, o.fit);
+          now = Snapshot(v, settled, estimation, validation, options);
         }
         std::string restart_note;
         OutputErrorResult restarted = RestartedOffBounds(pass.fitted, declared, pass.fit, estimation,

@@ -106,6 +106,29 @@ void SetNoise(const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
   }
 }
 
+// The start state of the segment of log `log_index` beginning at `row`: the
+// warm start's (OutputErrorOptions::start_segments), states matched by name,
+// when it has a segment beginning there; otherwise from the measurements.
+Eigen::VectorXd WarmStartState(const VehicleModel& model, const OutputErrorOptions& options,
+                               const std::vector<EstimationLog>& logs, size_t log_index,
+                               int row) {
+  Eigen::VectorXd x = model.StateOf(InitialStateFromLog(logs[log_index], row));
+  if (log_index >= options.start_segments.size()) return x;
+  const FittedSegments& seg = options.start_segments[log_index];
+  const auto at = std::find(seg.starts.begin(), seg.starts.end(), row);
+  if (at == seg.starts.end()) return x;
+  const size_t j = static_cast<size_t>(at - seg.starts.begin());
+  if (j >= seg.states.size()) return x;
+  const Eigen::VectorXd& given = seg.states[j];
+  const std::vector<std::string>& names = options.start_segment_state_names;
+  for (int k = 0; k < model.NumStates(); ++k) {
+    const auto n = std::find(names.begin(), names.end(), model.NameOfState(k));
+    const long i = n - names.begin();
+    if (n != names.end() && i < given.size()) x[k] = given[i];
+  }
+  return x;
+}
+
 }  // namespace
 
 Eigen::VectorXd InitialStateFromLog(const EstimationLog& log, int row) {
@@ -483,7 +506,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
       // Segment start states: measured at the first stage, then the previous
       // solve's trajectory at the new boundaries.
       auto start_state = [&](size_t log_index, int row) -> Eigen::VectorXd {
-        if (!have_previous) return InitialStateFromLog(logs[log_index], row);
+        if (!have_previous) return WarmStartState(vehicle.model, options, logs, log_index, row);
         const auto& seg = previous.segments[log_index];
         const auto& costs = previous.segment_costs[log_index];
         int j = static_cast<int>(std::upper_bound(seg.starts.begin(), seg.starts.end(), row) -

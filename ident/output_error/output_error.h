@@ -32,6 +32,12 @@
 
 namespace coaxid {
 
+// One flight log's fitted multiple-shooting segments.
+struct FittedSegments {
+  std::vector<int> starts;                  // segment start rows; the last row ends the last one
+  std::vector<Eigen::VectorXd> states;      // estimated start state of each segment
+};
+
 struct OutputErrorOptions {
   // Multiple-shooting segment lengths [s], one solve per entry, coarse to fine.
   std::vector<double> segment_schedule_s{0.25, 1.0};
@@ -61,6 +67,16 @@ struct OutputErrorOptions {
   bool scale_free_in_solve = true;
   // Start (and, with noise_relaxations = 0, keep) these noise std; empty: from the data.
   NoiseWeights noise;
+  // A warm start's segment states: a previous fit's result.segments (per log)
+  // and the names of its model's states (VehicleModel::StateNames). The
+  // first stage starts each segment that begins at a row given there from
+  // that state, matched by name (a state the previous model lacked, such as
+  // a candidate effect's, at rest); every other segment from the
+  // measurements. Empty: every segment from the measurements. A refit of a
+  // model nested in the new one, from the previous fit's parameters and
+  // segments, then starts exactly at the previous fit.
+  std::vector<FittedSegments> start_segments;
+  std::vector<std::string> start_segment_state_names;
   // Continuity residual scale [state units] of the final and of the coarse
   // stages. Small, so segments join up; not tiny, because a stiff penalty
   // makes Levenberg-Marquardt crawl (measured: 1e-4 took 100+ iterations
@@ -106,12 +122,6 @@ struct OutputErrorOptions {
     return o;
   }
   bool IsValid(std::string* why) const;
-};
-
-// One flight log's fitted multiple-shooting segments.
-struct FittedSegments {
-  std::vector<int> starts;                  // segment start rows; the last row ends the last one
-  std::vector<Eigen::VectorXd> states;      // estimated start state of each segment
 };
 
 struct OutputErrorResult {

@@ -129,8 +129,7 @@ TEST(RefitCandidate, AStartThatEndsAboveTheCurrentFitIsRunAgainFromTheOther) {
                          [](const CandidateScore& s) { return s.effect == "cg_offset"; });
   ASSERT_NE(cg, scores.end());
   ASSERT_TRUE(cg->passes);
-  int n = 0;
-  const double current = WeightedRss(logs, fit.predictions, fit.noise, &n);
+  const double current = fit.final_cost;  // the objective the refits minimise
   const Parameter& iyy = fit.parameters.Get("Iyy");
   cg->restart_values["Iyy"] = 0.5 * (iyy.value + iyy.upper);
   OutputErrorOptions refit_options = options;
@@ -138,13 +137,16 @@ TEST(RefitCandidate, AStartThatEndsAboveTheCurrentFitIsRunAgainFromTheOther) {
   OutputErrorResult refit;
   CandidatePass next;
   RefitCandidate(pass, logs, refit_options, {}, &*cg, &refit, &next);
-  ASSERT_EQ(cg->refit_starts.size(), 2u) << cg->refit_starts[0].weighted_rss << " " << current;
-  ASSERT_GT(cg->refit_starts[0].weighted_rss, current);  // the premise: the restart ends above
+  ASSERT_EQ(cg->refit_starts.size(), 2u) << cg->refit_starts[0].cost << " " << current;
+  ASSERT_GT(cg->refit_starts[0].cost, current);  // the premise: the restart ends above
   EXPECT_FALSE(cg->refit_starts[0].kept);
   EXPECT_TRUE(cg->refit_starts[1].kept);
-  EXPECT_LT(cg->refit_starts[1].weighted_rss, current);
+  EXPECT_LT(cg->refit_starts[1].cost, current);
   EXPECT_EQ(cg->rss_after, cg->refit_starts[1].weighted_rss);
-  // The kept refit is the one returned: its own RSS, the candidate's estimates.
+  // The kept refit is the one returned: its own cost and RSS, the
+  // candidate's estimates.
+  int n = 0;
+  EXPECT_EQ(refit.final_cost, cg->refit_starts[1].cost);
   EXPECT_NEAR(WeightedRss(logs, refit.predictions, fit.noise, &n), cg->rss_after,
               1e-9 * cg->rss_after);
   EXPECT_EQ(cg->parameters.Value("cg_offset.x_g"), refit.parameters.Value("cg_offset.x_g"));
@@ -154,7 +156,7 @@ TEST(RefitCandidate, AStartThatEndsAboveTheCurrentFitIsRunAgainFromTheOther) {
   again.refit_starts.clear();
   RefitCandidate(pass, logs, options, {}, &again, &refit, &next);
   ASSERT_EQ(again.refit_starts.size(), 1u);
-  EXPECT_LT(again.rss_after, current);
+  EXPECT_LT(again.refit_starts[0].cost, current);
 }
 
 }  // namespace
