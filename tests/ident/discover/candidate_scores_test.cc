@@ -26,6 +26,25 @@ bool Has(const std::vector<std::string>& v, const std::string& x) {
   return std::find(v.begin(), v.end(), x) != v.end();
 }
 
+// Output-error options of these tests: 1 s segments, the weights from the data.
+OutputErrorOptions OneSecondSegments() {
+  OutputErrorOptions options;
+  options.segment_schedule_s = {1.0};
+  options.noise_relaxations = 0;
+  return options;
+}
+
+// The candidates' pass at the declared model's fit (*fit; empty if the fit
+// is not usable).
+CandidatePass DeclaredPass(const std::vector<EstimationLog>& logs,
+                           const OutputErrorOptions& options, OutputErrorResult* fit) {
+  *fit = FitOutputError(Nominal(), logs, options);
+  if (!fit->usable) return {};
+  Vehicle fitted = Nominal();
+  fitted.parameters = fit->parameters;
+  return LinearisePass(fitted, *fit, logs, options);
+}
+
 TEST(RestartsAtBounds, WindIsBlindWhileTheBodyDragSitsAtItsBound) {
   const Vehicle declared = Nominal();
   FlightScenario f = ShippedFlightScenario().flight;
@@ -76,18 +95,14 @@ TEST(LinearisePass, TheResidualIsTheFitsOwnWithEveryCandidateAbsent) {
   FlightScenario f = ShippedFlightScenario().flight;
   f.duration_s = 6;
   const std::vector<EstimationLog> logs = {MakeEstimationLog(SimulateFlight(Truth({}), f, 3))};
-  OutputErrorOptions options;
-  options.segment_schedule_s = {1.0};
-  options.noise_relaxations = 0;
-  const OutputErrorResult fit = FitOutputError(Nominal(), logs, options);
+  const OutputErrorOptions options = OneSecondSegments();
+  OutputErrorResult fit;
+  const CandidatePass pass = DeclaredPass(logs, options, &fit);
   ASSERT_TRUE(fit.usable) << fit.why_not_usable;
-  Vehicle fitted = Nominal();
-  fitted.parameters = fit.parameters;
-  const CandidatePass pass = LinearisePass(fitted, fit, logs, options);
   ASSERT_TRUE(Has(pass.candidates, "motor_lag") && Has(pass.candidates, "servo_lag"));
   LinearisedFit declared_only;
   std::string why;
-  ASSERT_TRUE(LineariseFit(fitted, logs, fit.segments, fit.noise, {20}, options, {},
+  ASSERT_TRUE(LineariseFit(pass.fitted, logs, fit.segments, fit.noise, {20}, options, {},
                            &declared_only, &why))
       << why;
   EXPECT_NEAR(pass.linearised.rss, declared_only.rss, 1e-9 * declared_only.rss);
@@ -116,14 +131,10 @@ TEST(RefitCandidate, AStartThatEndsAboveTheCurrentFitIsRunAgainFromTheOther) {
   b.rate_hz = 50;
   const std::vector<EstimationLog> logs = {MakeEstimationLog(SimulateFlight(truth, f, 3)),
                                            MakeEstimationLog(SimulateBalance(truth, b, 21))};
-  OutputErrorOptions options;
-  options.segment_schedule_s = {1.0};
-  options.noise_relaxations = 0;
-  const OutputErrorResult fit = FitOutputError(Nominal(), logs, options);
+  const OutputErrorOptions options = OneSecondSegments();
+  OutputErrorResult fit;
+  const CandidatePass pass = DeclaredPass(logs, options, &fit);
   ASSERT_TRUE(fit.usable) << fit.why_not_usable;
-  Vehicle fitted = Nominal();
-  fitted.parameters = fit.parameters;
-  const CandidatePass pass = LinearisePass(fitted, fit, logs, options);
   std::vector<CandidateScore> scores = ScoreCandidates(pass, logs, 0.01, 1, 1.0);
   auto cg = std::find_if(scores.begin(), scores.end(),
                          [](const CandidateScore& s) { return s.effect == "cg_offset"; });
