@@ -136,8 +136,8 @@ nlohmann::json Ekf(const Vehicle& start, const Vehicle& truth, const RunLogs& lo
   const EkfResult r =
       RunEkf(start, logs.flight_estimation, NoiseFromData(logs.flight_estimation), o);
   if (!r.usable) return {{"ok", false}, {"error", r.failure}};
-  nlohmann::json p = ParametersOnScale(r.free_names, r.estimate, r.estimate_std, r.identifiable, r.gauge,
-                                       r.parameters, truth);
+  nlohmann::json p = ParametersOnScale(r.free_names, r.estimate, r.estimate_std, r.identifiable,
+                                       r.gauge, r.parameters, truth);
   AddRatios(r.ratios, r.parameters, truth, &p);
   return {{"ok", true}, {"parameters", p}};
 }

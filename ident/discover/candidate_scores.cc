@@ -165,12 +165,12 @@ nlohmann::json CandidateScore::ToJson() const {
   j["blind_at_bounds"] = blind_at_bounds;
   if (!restart_values.empty()) j["restart_values"] = restart_values;
   if (!refit_starts.empty()) {
+    auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
     nlohmann::json starts = nlohmann::json::array();
     for (const RefitStart& r : refit_starts) {
       starts.push_back({{"from", r.from},
-                        {"cost", std::isfinite(r.cost) ? nlohmann::json(r.cost) : nlohmann::json(nullptr)},
-                        {"weighted_rss", std::isfinite(r.weighted_rss) ? nlohmann::json(r.weighted_rss)
-                                                                      : nlohmann::json(nullptr)},
+                        {"cost", number(r.cost)},
+                        {"weighted_rss", number(r.weighted_rss)},
                         {"kept", r.kept}});
     }
     j["refit_starts"] = starts;
@@ -365,17 +365,6 @@ bool ReachesAny(const std::vector<std::string>& channels, const std::vector<std:
   });
 }
 
-// Restarts only the parameters whose channels the candidate reaches from
-// there: restarting every parameter at a bound (Ixx at 50 x its value on a
-// flight-only log) left the right candidate's refit worse than its warm start.
-// A candidate that already reaches those channels restarts them too: from the
-// bound its refit stays in the declared fit's basin (measured: an undeclared
-// CG offset with a balance log, d pressed to its lower bound and Iyy to its
-// upper one so that the swashplate's trim moment vanishes; the cg_offset
-// refit from there was never tried, from the config it is the right model;
-// an undeclared swashplate bias, low flight, flight only, sigma0 and Cy at
-// bounds: the passing swashplate_bias refitted from there stayed
-// insignificant, from the config values it is found).
 std::map<std::string, double> ConfigValuesOfParametersAtBounds(const ParameterSet& fit,
                                                                const Vehicle& declared) {
   std::map<std::string, double> out;
@@ -388,6 +377,17 @@ std::map<std::string, double> ConfigValuesOfParametersAtBounds(const ParameterSe
   return out;
 }
 
+// Restarts only the parameters whose channels the candidate reaches from
+// there: restarting every parameter at a bound (Ixx at 50 x its value on a
+// flight-only log) left the right candidate's refit worse than its warm start.
+// A candidate that already reaches those channels restarts them too: from the
+// bound its refit stays in the declared fit's basin (measured: an undeclared
+// CG offset with a balance log, d pressed to its lower bound and Iyy to its
+// upper one so that the swashplate's trim moment vanishes; the cg_offset
+// refit from there was never tried, from the config it is the right model;
+// an undeclared swashplate bias, low flight, flight only, sigma0 and Cy at
+// bounds: the passing swashplate_bias refitted from there stayed
+// insignificant, from the config values it is found).
 void MarkRestartsAtBounds(const Vehicle& fitted, const Vehicle& declared,
                           const std::map<std::string, std::vector<std::string>>& distorted,
                           const std::vector<EstimationLog>& logs, const NoiseWeights& noise,

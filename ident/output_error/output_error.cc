@@ -503,8 +503,8 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
       a = std::move(previous);
       SetNoise(logs, noise, &a);
     } else {
-      // Segment start states: measured at the first stage, then the previous
-      // solve's trajectory at the new boundaries.
+      // Segment start states: measured (or the warm start's) at the first
+      // stage, then the previous solve's trajectory at the new boundaries.
       auto start_state = [&](size_t log_index, int row) -> Eigen::VectorXd {
         if (!have_previous) return WarmStartState(vehicle.model, options, logs, log_index, row);
         const auto& seg = previous.segments[log_index];
