@@ -91,7 +91,8 @@ struct CandidateScore {
   // absence (one-sided parameters at typical).
   std::map<std::string, double> restart_values;
   // The refit's starts: one, or two when the first ended above the current
-  // fit's objective or at a bound beside declared parameters at theirs.
+  // fit's objective or at a bound beside declared parameters at theirs, or
+  // restarted declared parameters though the candidate passes its score test.
   std::vector<RefitStart> refit_starts;
   // The refit (shortlisted candidates): joint refit, Wald test.
   bool refitted = false;
@@ -198,18 +199,27 @@ OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<Estimation
                             const OutputErrorOptions& fit_options, const Vehicle& current,
                             const OutputErrorResult& current_fit, bool coarse_to_fine = false);
 
+// The fit of `model` (`fit`) with its noise weights re-estimated once from
+// its residuals and solved again, warm from the fit (an output-error
+// relaxation), when fit_options.noise_relaxations allows one and the weights
+// move by more than its tolerance. True if *fit was replaced.
+bool Reweighted(const Vehicle& model, const std::vector<EstimationLog>& logs,
+                const OutputErrorOptions& fit_options, OutputErrorResult* fit);
+
 // Refits `score.effect` jointly into the pass's model (starting at its
 // linearised estimates, or at absence with score.restart_values restarted;
 // noise weights of the current fit) and tests its parameters at the refit
 // (cluster-robust Wald). A refit that ends above the current fit's objective
 // (its model holds the current one, so it stopped short), or with a
 // parameter of the effect at a bound while declared parameters sit at theirs
-// (`declared_at_bounds`: their config values), runs again from the other
-// start (restarted <-> at the current fit) and the lower objective is kept
-// (score.refit_starts). Fills the score's refit fields (Wald, estimates,
-// plausibility); on success returns the refit in *refit and the pass at the
-// refit (the next round's scoring pass, if it is accepted) in *next. False,
-// with why_not_confirmed, when the refit or the test fails.
+// (`declared_at_bounds`: their config values), or that restarted declared
+// parameters though the candidate passes its score test, runs again from
+// the other start (restarted <-> at the current fit) and the lower objective
+// is kept (score.refit_starts); the kept refit is then Reweighted. Fills the
+// score's refit fields (Wald, estimates, plausibility); on success returns
+// the refit in *refit and the pass at the refit (the next round's scoring
+// pass, if it is accepted) in *next. False, with why_not_confirmed, when the
+// refit or the test fails.
 bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
                     const OutputErrorOptions& fit_options,
                     const std::map<std::string, double>& declared_at_bounds,

@@ -100,31 +100,6 @@ OutputErrorResult Converged(const Vehicle& model, OutputErrorResult fit,
   return fit;
 }
 
-// The noise weights of a model with an effect just added: the candidates'
-// refits kept the current fit's (every comparison is made at them), which
-// the missing effect inflated in its channels; the new model re-estimates
-// them once from its residuals and is solved again (an output-error
-// relaxation, as the declared fit's), warm from its fit. True if *fit was
-// replaced (not when the weights move by less than the relaxation
-// tolerance).
-bool Reweighted(const Vehicle& model, const std::vector<EstimationLog>& logs,
-                const OutputErrorOptions& fit_options, OutputErrorResult* fit) {
-  if (fit_options.noise_relaxations < 1) return false;
-  OutputErrorOptions o = fit_options;
-  o.noise = fit->noise;
-  o.noise_relaxations = 1;
-  o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
-  o.start_segments = fit->segments;
-  o.start_segment_state_names = model.model.StateNames();
-  Vehicle v = model;
-  v.parameters = fit->parameters;
-  OutputErrorResult relaxed = FitOutputError(v, logs, o);
-  // Weights that moved less than the tolerance were not applied: no change.
-  if (!relaxed.usable || relaxed.noise.std == fit->noise.std) return false;
-  *fit = std::move(relaxed);
-  return true;
-}
-
 // A declared fit that left parameters at a bound may sit in a wrong basin
 // rather than show a missing effect: the declared model refitted with those
 // parameters restarted at their config values (the others at the fit),
@@ -315,9 +290,8 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
         starts += (starts.empty() ? "" : "; ") + r.from + ": cost " +
                   NumberText(r.cost, "%.6g") + (r.kept ? " (kept)" : "");
       }
-      Say(o, "    two starts (the first ended above the current fit's cost " +
-                 NumberText(pass.fit.final_cost, "%.6g") +
-                 " or at a bound beside declared parameters at theirs): " + starts);
+      Say(o, "    two starts (the current fit's cost " + NumberText(pass.fit.final_cost, "%.6g") +
+                 "; the lower is kept): " + starts);
     }
   }
   return refits;
@@ -561,14 +535,12 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                          NumberText(100 * s.share_of_excess, "%.0f") + " % of its channels' excess error)");
         pass = std::move(refits[best].next);
         now = std::move(refits[best].snapshot);
-        bool refitted = pass.fit.hit_iteration_limit;
-        OutputErrorResult settled = Converged(pass.fitted, pass.fit, estimation, o.fit, options);
-        refitted |= Reweighted(pass.fitted, estimation, o.fit, &settled);
-        if (refitted) {
+        if (pass.fit.hit_iteration_limit) {
+          const OutputErrorResult fit = Converged(pass.fitted, pass.fit, estimation, o.fit, options);
           Vehicle v = pass.fitted;
-          v.parameters = settled.parameters;
-          pass = LinearisePass(v, settled, estimation, o.fit);
-          now = Snapshot(v, settled, estimation, validation, options);
+          v.parameters = fit.parameters;
+          pass = LinearisePass(v, fit, estimation, o.fit);
+          now = Snapshot(v, fit, estimation, validation, options);
         }
         std::string restart_note;
         OutputErrorResult restarted = RestartedOffBounds(pass.fitted, declared, pass.fit, estimation,
