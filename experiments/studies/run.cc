@@ -66,21 +66,23 @@ nlohmann::json LinearKf(const Vehicle& start, const Vehicle& truth, const RunLog
 }
 
 // The truth an estimate is judged against. Flight logs alone fix only the
-// scale-free ratios; a fit that held d for the scale (model.md decision 8)
-// reports every member of the scale group on the held scale, so its truth
-// is the truth moved along the scale line onto the held d: each member times
-// d_held / d_truth (every member scales as the common factor, scale_gauge.h).
-// Marked "truth_on_held_scale" in the record.
+// scale-free ratios; a fit whose scale one held member sets (d held for the
+// scale, model.md decision 8, or held by the model it refits, as discover's
+// refits are) reports every member of the scale group on that scale, so its
+// truth is the truth moved along the scale line onto the held value: each
+// member times held / truth of the held member (every member scales as the
+// common factor, scale_gauge.h). Marked "truth_on_held_scale" in the record.
 nlohmann::json JudgedTruth(const ScaleGauge& gauge, const ParameterSet& estimates,
                            const Vehicle& truth, const std::string& name, bool* on_held_scale) {
   *on_held_scale = false;
   const nlohmann::json t = Truth(truth, name);
-  if (gauge.held.empty() || t.is_null() || !truth.parameters.Has(gauge.held) ||
+  const std::string& held = gauge.held_member;
+  if (held.empty() || t.is_null() || !truth.parameters.Has(held) ||
       std::find(gauge.group.begin(), gauge.group.end(), name) == gauge.group.end()) {
     return t;
   }
   *on_held_scale = true;
-  return Number(t.get<double>() * estimates.Value(gauge.held) / truth.parameters.Value(gauge.held));
+  return Number(t.get<double>() * estimates.Value(held) / truth.parameters.Value(held));
 }
 
 nlohmann::json ParametersOnScale(const std::vector<std::string>& names,
