@@ -420,16 +420,31 @@ void MarkRestartsAtBounds(const Vehicle& fitted, const Vehicle& declared,
   }
 }
 
-OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
-                            const OutputErrorOptions& fit_options, const Vehicle& current,
-                            const OutputErrorResult& current_fit, bool coarse_to_fine) {
+namespace {
+
+// A solve near the current fit: the final segment length, each segment
+// starting on the current fit's trajectory, at its noise weights, kept.
+OutputErrorOptions WarmOptions(const OutputErrorOptions& fit_options, const Vehicle& current,
+                               const OutputErrorResult& current_fit) {
   OutputErrorOptions o = fit_options;
   o.noise = current_fit.noise;
   o.noise_relaxations = 0;
-  if (!coarse_to_fine) {
-    o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
-    o.start_segments = current_fit.segments;
-    o.start_segment_state_names = current.model.StateNames();
+  o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
+  o.start_segments = current_fit.segments;
+  o.start_segment_state_names = current.model.StateNames();
+  return o;
+}
+
+}  // namespace
+
+OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
+                            const OutputErrorOptions& fit_options, const Vehicle& current,
+                            const OutputErrorResult& current_fit, bool coarse_to_fine) {
+  OutputErrorOptions o = WarmOptions(fit_options, current, current_fit);
+  if (coarse_to_fine) {
+    o.segment_schedule_s = fit_options.segment_schedule_s;
+    o.start_segments.clear();
+    o.start_segment_state_names.clear();
   }
   OutputErrorResult refit = FitOutputError(vehicle, logs, o);
   if (!refit.usable && refit.scale_move_failed) {
@@ -477,6 +492,24 @@ Vehicle CandidateStart(const CandidatePass& pass, const CandidateScore& score,
   return candidate;
 }
 
+// The fit of `model` (`fit`) with its noise weights re-estimated once from
+// its residuals and solved again, warm from the fit (an output-error
+// relaxation), when fit_options.noise_relaxations allows one and the weights
+// move by more than its tolerance. True if *fit was replaced.
+bool Reweighted(const Vehicle& model, const std::vector<EstimationLog>& logs,
+                const OutputErrorOptions& fit_options, OutputErrorResult* fit) {
+  if (fit_options.noise_relaxations < 1 || !fit->usable) return false;
+  OutputErrorOptions o = WarmOptions(fit_options, model, *fit);
+  o.noise_relaxations = 1;
+  Vehicle v = model;
+  v.parameters = fit->parameters;
+  OutputErrorResult relaxed = FitOutputError(v, logs, o);
+  // Weights that moved less than the tolerance were not applied: no change.
+  if (!relaxed.usable || relaxed.noise.std == fit->noise.std) return false;
+  *fit = std::move(relaxed);
+  return true;
+}
+
 std::string StartText(const std::map<std::string, double>& restarts, bool from_step) {
   if (from_step) return "its linearised step, the rest at the current fit";
   std::string names;
@@ -494,24 +527,6 @@ bool OwnParameterAtBound(const std::string& effect, const ParameterSet& paramete
 }
 
 }  // namespace
-
-bool Reweighted(const Vehicle& model, const std::vector<EstimationLog>& logs,
-                const OutputErrorOptions& fit_options, OutputErrorResult* fit) {
-  if (fit_options.noise_relaxations < 1 || !fit->usable) return false;
-  OutputErrorOptions o = fit_options;
-  o.noise = fit->noise;
-  o.noise_relaxations = 1;
-  o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
-  o.start_segments = fit->segments;
-  o.start_segment_state_names = model.model.StateNames();
-  Vehicle v = model;
-  v.parameters = fit->parameters;
-  OutputErrorResult relaxed = FitOutputError(v, logs, o);
-  // Weights that moved less than the tolerance were not applied: no change.
-  if (!relaxed.usable || relaxed.noise.std == fit->noise.std) return false;
-  *fit = std::move(relaxed);
-  return true;
-}
 
 bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
                     const OutputErrorOptions& fit_options,

@@ -199,13 +199,6 @@ OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<Estimation
                             const OutputErrorOptions& fit_options, const Vehicle& current,
                             const OutputErrorResult& current_fit, bool coarse_to_fine = false);
 
-// The fit of `model` (`fit`) with its noise weights re-estimated once from
-// its residuals and solved again, warm from the fit (an output-error
-// relaxation), when fit_options.noise_relaxations allows one and the weights
-// move by more than its tolerance. True if *fit was replaced.
-bool Reweighted(const Vehicle& model, const std::vector<EstimationLog>& logs,
-                const OutputErrorOptions& fit_options, OutputErrorResult* fit);
-
 // Refits `score.effect` jointly into the pass's model (starting at its
 // linearised estimates, or at absence with score.restart_values restarted;
 // noise weights of the current fit) and tests its parameters at the refit
@@ -215,7 +208,8 @@ bool Reweighted(const Vehicle& model, const std::vector<EstimationLog>& logs,
 // (`declared_at_bounds`: their config values), or that restarted declared
 // parameters though the candidate passes its score test, runs again from
 // the other start (restarted <-> at the current fit) and the lower objective
-// is kept (score.refit_starts); the kept refit is then Reweighted. Fills the
+// is kept (score.refit_starts); the kept refit then re-estimates its noise
+// weights once (an output-error relaxation). Fills the
 // score's refit fields (Wald, estimates, plausibility); on success returns
 // the refit in *refit and the pass at the refit (the next round's scoring
 // pass, if it is accepted) in *next. False, with why_not_confirmed, when the
