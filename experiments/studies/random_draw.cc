@@ -109,6 +109,44 @@ double SwashplateAmplitude(const Excitation& e, double rms) {
   return rms / std::sqrt(sum / n);
 }
 
+// A factor drawn log-uniformly in [lo, hi] (as likely to halve as to double).
+double LogUniform(Rng& rng, const std::array<double, 2>& range) {
+  return std::exp(Uniform(rng, {std::log(range[0]), std::log(range[1])}));
+}
+
+// Another controller and other sensors than the template's: each gain and
+// each logged channel's noise std times its own factor (the position loop's
+// tilt limit stays). Drawn from their own stream, so turning them on leaves
+// every other draw of the seed as it was.
+struct ControllerAndSensors {
+  std::map<std::string, double> gain_factors, noise_factors;
+
+  ControllerAndSensors(const StudyRandomisation& r, const FlightScenario& f, uint64_t seed) {
+    Rng rng(MixSeed(seed, 2001));
+    if (r.controller_gain_factor[0] != 1 || r.controller_gain_factor[1] != 1) {
+      for (const char* name : {"att_kp", "att_kd", "alt_kp", "alt_kd", "alt_ki", "yaw_kp",
+                               "yaw_kd", "pos_kp", "pos_kd"}) {
+        gain_factors[name] = LogUniform(rng, r.controller_gain_factor);
+      }
+    }
+    if (r.sensor_noise_factor[0] != 1 || r.sensor_noise_factor[1] != 1) {
+      for (const auto& [column, std] : f.noise_std) {
+        if (std > 0) noise_factors[column] = LogUniform(rng, r.sensor_noise_factor);
+      }
+    }
+  }
+
+  void ApplyTo(FlightScenario* f) const {
+    ControllerGains& g = f->gains;
+    const std::map<std::string, double*> gains = {
+        {"att_kp", &g.att_kp}, {"att_kd", &g.att_kd}, {"alt_kp", &g.alt_kp},
+        {"alt_kd", &g.alt_kd}, {"alt_ki", &g.alt_ki}, {"yaw_kp", &g.yaw_kp},
+        {"yaw_kd", &g.yaw_kd}, {"pos_kp", &g.pos_kp}, {"pos_kd", &g.pos_kd}};
+    for (const auto& [name, factor] : gain_factors) *gains.at(name) *= factor;
+    for (const auto& [column, factor] : noise_factors) f->noise_std[column] *= factor;
+  }
+};
+
 }  // namespace
 
 RandomDraw DrawRun(const StudySpec& spec, uint64_t seed) {
@@ -195,7 +233,9 @@ RandomDraw DrawRun(const StudySpec& spec, uint64_t seed) {
     e.amplitude["delta_cx"] = e.amplitude["delta_cy"] = a;
     return s;
   };
+  const ControllerAndSensors flown_by(r, flight_template->flight, seed);
   Scenario flight = make_flight(duration, excitation, 0);
+  flown_by.ApplyTo(&flight.flight);
   const double difference = SetTrimDifference(spec.config, target_difference,
                                               flight.flight.waypoints.front().height, &flight);
   truth.truth_parameters = flight.truth_parameters;  // with the trimmed gamma2
@@ -211,6 +251,7 @@ RandomDraw DrawRun(const StudySpec& spec, uint64_t seed) {
   if (r.held_out_s > 0) {
     draw.has_held_out = true;
     draw.held_out = make_flight(r.held_out_s, "3211", 2);
+    flown_by.ApplyTo(&draw.held_out.flight);
     draw.held_out.name = flight_template->name + "_held_out";
   }
 
@@ -228,6 +269,8 @@ RandomDraw DrawRun(const StudySpec& spec, uint64_t seed) {
                  {"omega_difference_rad_s", difference}};
   for (const Waypoint& w : flight.flight.waypoints) d["flight"]["heights_m"].push_back(w.height);
   d["held_out_s"] = draw.has_held_out ? r.held_out_s : 0.0;
+  if (!flown_by.gain_factors.empty()) d["controller_gain_factors"] = flown_by.gain_factors;
+  if (!flown_by.noise_factors.empty()) d["sensor_noise_factors"] = flown_by.noise_factors;
   draw.description = d;
   return draw;
 }

@@ -37,8 +37,12 @@ struct RandomDraw {
 // amplitude and four waypoints in the hover or low band (always low with
 // ground_effect). An outside-library load takes a strength from its range,
 // yaw_from_swashplate with a random sign, thrust_from_climb_rate positive
-// (thrust falling with the climb rate). Streams: flight MixSeed(seed, 0), balance 1, held out 2,
-// the draw itself 2000. Throws ComputationError if no trim exists.
+// (thrust falling with the climb rate). With controller_gain_factor or
+// sensor_noise_factor other than [1, 1], each controller gain and each logged
+// channel's noise std of the flight and the held-out flight takes its own
+// log-uniform factor. Streams: flight MixSeed(seed, 0), balance 1, held out
+// 2, the draw itself 2000, controller and sensors 2001. Throws
+// ComputationError if no trim exists.
 RandomDraw DrawRun(const StudySpec& spec, uint64_t seed);
 
 }  // namespace coaxid

@@ -133,7 +133,8 @@ StudyRandomisation ParseRandomisation(const YAML::Node& node, const std::string&
             {"truth_offset", "truths", "effects", "effect_strength", "outside_strength",
              "excitation", "swashplate_rms_rad", "omega_difference_rad_s",
              "gyroscopic_omega_difference_rad_s", "duration_s", "hover_height_m", "low_height_m",
-             "low_share", "balance_share", "held_out_s"},
+             "low_share", "balance_share", "held_out_s", "controller_gain_factor",
+             "sensor_noise_factor"},
             where);
   if (spec.sweep.setting != SweepSetting::kNone) {
     throw InputError(where + ": a randomised study draws its settings per seed and takes no sweep");
@@ -155,6 +156,8 @@ StudyRandomisation ParseRandomisation(const YAML::Node& node, const std::string&
   range("duration_s", &r.duration_s, 5);
   range("hover_height_m", &r.hover_height_m, 0.05);
   range("low_height_m", &r.low_height_m, 0.05);
+  range("controller_gain_factor", &r.controller_gain_factor, 1e-3);
+  range("sensor_noise_factor", &r.sensor_noise_factor, 1e-3);
   if (r.truth_offset[1] >= 1) throw InputError(where + ".truth_offset: must stay below 1");
   if (const YAML::Node t = node["truths"]) {
     const std::string w = where + ".truths";

@@ -69,6 +69,11 @@ struct StudyRandomisation {
   double low_share = 0.5;      // share of the other flights flown low
   double balance_share = 0.5;  // share of runs that add the spec's balance scenario
   double held_out_s = 30;      // a 3211 flight held out for discover (0: none)
+  // Flights by other controllers and sensors than the template's: each
+  // controller gain, and each logged channel's noise std, times its own
+  // factor drawn log-uniformly in the range ([1, 1]: the template's).
+  std::array<double, 2> controller_gain_factor{1, 1};
+  std::array<double, 2> sensor_noise_factor{1, 1};
 };
 
 struct StudySpec {

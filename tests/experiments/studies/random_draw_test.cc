@@ -87,6 +87,53 @@ TEST(RandomDraw, IsAPureFunctionOfTheSeedAndStaysInItsRanges) {
   }
 }
 
+// Another controller and other sensors: each gain and each logged channel's
+// noise std takes its own factor in the range, the same on the held-out
+// flight, and every other draw of the seed stays as it was (their own
+// stream), so a spec that turns them on flies the same truths and flights.
+TEST(RandomDraw, OtherControllersAndSensorsChangeOnlyGainsAndNoise) {
+  const StudySpec plain = ParseStudySpec(SpecText(), kSpecPath);
+  const StudySpec other = ParseStudySpec(
+      SpecText("randomise: {controller_gain_factor: [0.7, 1.5], sensor_noise_factor: [0.5, 2]}\n"),
+      kSpecPath);
+  const FlightScenario& t = plain.scenarios.front().flight;
+  int gains_changed = 0;
+  for (uint64_t seed = 200; seed < 215; ++seed) {
+    const RandomDraw a = DrawRun(plain, seed), b = DrawRun(other, seed);
+    nlohmann::json rest = b.description;
+    rest.erase("controller_gain_factors");
+    rest.erase("sensor_noise_factors");
+    EXPECT_EQ(rest, a.description) << seed;
+    const FlightScenario& fa = a.scenarios.front().flight;
+    const FlightScenario& fb = b.scenarios.front().flight;
+    EXPECT_EQ(fb.excitation.amplitude, fa.excitation.amplitude);
+    EXPECT_EQ(fb.waypoints.size(), fa.waypoints.size());
+    const auto& g = b.description["controller_gain_factors"];
+    ASSERT_EQ(g.size(), 9u);
+    for (const auto& [name, factor] : g.items()) {
+      EXPECT_GE(factor.get<double>(), 0.7 - 1e-12) << name;
+      EXPECT_LE(factor.get<double>(), 1.5 + 1e-12) << name;
+    }
+    EXPECT_DOUBLE_EQ(fb.gains.att_kd, t.gains.att_kd * g["att_kd"].get<double>());
+    EXPECT_DOUBLE_EQ(fb.gains.alt_ki, t.gains.alt_ki * g["alt_ki"].get<double>());
+    EXPECT_DOUBLE_EQ(fb.gains.max_tilt, t.gains.max_tilt);
+    gains_changed += fb.gains.att_kp != fa.gains.att_kp;
+    const auto& n = b.description["sensor_noise_factors"];
+    for (const auto& [column, std] : t.noise_std) {
+      if (std == 0) {
+        EXPECT_FALSE(n.contains(column)) << column;
+        continue;
+      }
+      const double factor = n[column].get<double>();
+      EXPECT_TRUE(factor >= 0.5 - 1e-12 && factor <= 2 + 1e-12) << column << " " << factor;
+      EXPECT_DOUBLE_EQ(fb.noise_std.at(column), std * factor) << column;
+      EXPECT_DOUBLE_EQ(b.held_out.flight.noise_std.at(column), std * factor) << column;
+    }
+    EXPECT_DOUBLE_EQ(b.held_out.flight.gains.yaw_kp, fb.gains.yaw_kp);
+  }
+  EXPECT_EQ(gains_changed, 15);
+}
+
 // Weights none 3, single 8, pair 2, outside 2 (of 15): over 300 seeds each
 // class's count lies within 4 binomial std of its expectation.
 TEST(RandomDraw, DrawsTheTruthClassesAtTheirWeights) {
@@ -117,6 +164,9 @@ TEST(RandomDraw, SpecsThatCannotBeRandomisedAreRefused) {
   refused(SpecText("randomise: {effects: [tail_rotor]}\n"), "'tail_rotor' is not an effect");
   refused(SpecText("randomise: {truths: {some: 1}}\n"), "unknown key 'some'");
   refused(SpecText("randomise: {excitation: [chirp]}\n"), "'chirp' is not multisine");
+  refused(SpecText("randomise: {controller_gain_factor: [0, 2]}\n"),
+          "randomise.controller_gain_factor");
+  refused(SpecText("randomise: {sensor_noise_factor: [2, 0.5]}\n"), "randomise.sensor_noise_factor");
   refused("study: random\nconfig: ../glmav.yaml\nscenarios: [../scenarios/flight.yaml, "
           "../scenarios/flight_3211.yaml]\nmethods: [discover]\nseeds: {count: 2}\nrandomise: {}\n",
           "exactly one flight scenario");
