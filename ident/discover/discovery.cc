@@ -12,6 +12,7 @@
 #include "core/report_values.h"
 #include "core/stopwatch.h"
 #include "ident/discover/practical_significance.h"
+#include "ident/discover/shortlist.h"
 #include "ident/ekf/ekf_start.h"
 
 namespace coaxid {
@@ -141,60 +142,6 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
   if (!(after < before)) return fit;
   *note = line;
   return Converged(model, std::move(refit), logs, fit_options, options);
-}
-
-// The candidates to refit (indices into scores), none of `excluded` (removed
-// effects do not come back): at most max_refits of those that pass the
-// linearised test; then, if the current fit holds parameters at a bound
-// (step 7), at most max_refits more, restarted off the bounds: first those
-// blind at the bounds (measured: an undeclared wind with Cx, Cy pressed to 0,
-// flight only, never refitted), then the testable ones acting on a channel
-// those parameters distort (`symptom_channels`): the linearisation at a bound
-// is a poor guide (measured: an undeclared ground effect at 0.13-0.9 m, Cz
-// pressed at its bound, predicted to remove 2 % of the excess, 90 % at the
-// refit; an undeclared CG offset with d and Iyy at bounds, never shortlisted
-// while three passing candidates filled the slots); then, up to max_refits in
-// all, the testable ones predicted to remove at least half of
-// min_share_of_excess. Largest predicted share first within each group; a
-// share above 1 (the linearised step would fit the channels below their
-// noise) says the linearisation failed, not that the candidate is promising,
-// and ranks last (measured, seed 8000 of discover_controllers.yaml: an
-// undeclared ground effect, Cz at 0; wake_interference "predicted" 406 %
-// and took the slot ground_effect, at 0.6 %, needed).
-std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
-                           const std::vector<std::string>& symptom_channels,
-                           const std::vector<std::string>& excluded, const DiscoveryOptions& o) {
-  std::vector<int> passing, blind, symptomatic, promising;
-  for (size_t k = 0; k < scores.size(); ++k) {
-    const CandidateScore& s = scores[k];
-    if (std::find(excluded.begin(), excluded.end(), s.effect) != excluded.end()) continue;
-    if (s.passes) {
-      passing.push_back(static_cast<int>(k));
-    } else if (s.blind_at_bounds) {
-      blind.push_back(static_cast<int>(k));
-    } else if (s.testable && ReachesAny(s.channels, symptom_channels)) {
-      symptomatic.push_back(static_cast<int>(k));
-    } else if (s.testable && s.predicted_share >= 0.5 * o.min_share_of_excess) {
-      promising.push_back(static_cast<int>(k));
-    }
-  }
-  auto ranking_share = [&](int k) {
-    return scores[k].predicted_share <= 1 ? scores[k].predicted_share : -1.0;
-  };
-  auto by_share = [&](int a, int b) { return ranking_share(a) > ranking_share(b); };
-  std::stable_sort(symptomatic.begin(), symptomatic.end(), by_share);
-  std::stable_sort(promising.begin(), promising.end(), by_share);
-  auto take = [&](const std::vector<int>& group, size_t at_most, std::vector<int>* out) {
-    for (size_t i = 0; i < group.size() && i < at_most; ++i) out->push_back(group[i]);
-  };
-  const size_t max_refits = static_cast<size_t>(o.max_refits);
-  std::vector<int> out;
-  take(passing, max_refits, &out);
-  std::vector<int> at_bounds = blind;
-  at_bounds.insert(at_bounds.end(), symptomatic.begin(), symptomatic.end());
-  take(at_bounds, max_refits, &out);
-  take(promising, max_refits > out.size() ? max_refits - out.size() : 0, &out);
-  return out;
 }
 
 // Refits the shortlisted candidates side by side and judges each: Wald p
@@ -513,7 +460,8 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
       MarkRestartsAtBounds(pass.fitted, declared, distorted, estimation, pass.fit.noise, &scores);
       std::vector<std::string> removed;  // a removed effect does not come back (no cycling)
       for (const RemovedEffect& r : out.removed) removed.push_back(r.effect);
-      const std::vector<int> shortlist = Shortlist(scores, symptom_channels, removed, options);
+      const std::vector<int> shortlist = Shortlist(scores, symptom_channels, removed,
+                                                    options.max_refits, options.min_share_of_excess);
       for (int k : shortlist) {
         const CandidateScore& s = scores[k];
         if (s.restart_values.empty()) continue;

@@ -1,0 +1,44 @@
+#include "ident/discover/shortlist.h"
+
+#include <algorithm>
+
+namespace coaxid {
+
+std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
+                           const std::vector<std::string>& symptom_channels,
+                           const std::vector<std::string>& excluded, int max_refits,
+                           double min_share_of_excess) {
+  std::vector<int> passing, blind, symptomatic, promising;
+  for (size_t k = 0; k < scores.size(); ++k) {
+    const CandidateScore& s = scores[k];
+    if (std::find(excluded.begin(), excluded.end(), s.effect) != excluded.end()) continue;
+    if (s.passes) {
+      passing.push_back(static_cast<int>(k));
+    } else if (s.blind_at_bounds) {
+      blind.push_back(static_cast<int>(k));
+    } else if (s.testable && ReachesAny(s.channels, symptom_channels)) {
+      symptomatic.push_back(static_cast<int>(k));
+    } else if (s.testable && s.predicted_share >= 0.5 * min_share_of_excess) {
+      promising.push_back(static_cast<int>(k));
+    }
+  }
+  auto ranking_share = [&](int k) {
+    return scores[k].predicted_share <= 1 ? scores[k].predicted_share : -1.0;
+  };
+  auto by_share = [&](int a, int b) { return ranking_share(a) > ranking_share(b); };
+  std::stable_sort(symptomatic.begin(), symptomatic.end(), by_share);
+  std::stable_sort(promising.begin(), promising.end(), by_share);
+  const size_t at_most = static_cast<size_t>(std::max(0, max_refits));
+  auto take = [&](const std::vector<int>& group, size_t n, std::vector<int>* out) {
+    for (size_t i = 0; i < group.size() && i < n; ++i) out->push_back(group[i]);
+  };
+  std::vector<int> out;
+  take(passing, at_most, &out);
+  std::vector<int> at_bounds = blind;
+  at_bounds.insert(at_bounds.end(), symptomatic.begin(), symptomatic.end());
+  take(at_bounds, at_most, &out);
+  take(promising, at_most > out.size() ? at_most - out.size() : 0, &out);
+  return out;
+}
+
+}  // namespace coaxid
