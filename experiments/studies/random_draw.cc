@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <utility>
 
 #include "core/errors.h"
 #include "dynamics/effects/effect_library.h"
@@ -114,18 +115,25 @@ double LogUniform(Rng& rng, const std::array<double, 2>& range) {
   return std::exp(Uniform(rng, {std::log(range[0]), std::log(range[1])}));
 }
 
+// The controller's gains by name (not the position loop's tilt limit), in
+// the order their factors are drawn.
+std::vector<std::pair<std::string, double*>> Gains(ControllerGains* g) {
+  return {{"att_kp", &g->att_kp}, {"att_kd", &g->att_kd}, {"alt_kp", &g->alt_kp},
+          {"alt_kd", &g->alt_kd}, {"alt_ki", &g->alt_ki}, {"yaw_kp", &g->yaw_kp},
+          {"yaw_kd", &g->yaw_kd}, {"pos_kp", &g->pos_kp}, {"pos_kd", &g->pos_kd}};
+}
+
 // Another controller and other sensors than the template's: each gain and
-// each logged channel's noise std times its own factor (the position loop's
-// tilt limit stays). Drawn from their own stream, so turning them on leaves
-// every other draw of the seed as it was.
+// each logged channel's noise std times its own factor. Drawn from their own
+// stream, so turning them on leaves every other draw of the seed as it was.
 struct ControllerAndSensors {
   std::map<std::string, double> gain_factors, noise_factors;
 
   ControllerAndSensors(const StudyRandomisation& r, const FlightScenario& f, uint64_t seed) {
     Rng rng(MixSeed(seed, 2001));
     if (r.controller_gain_factor[0] != 1 || r.controller_gain_factor[1] != 1) {
-      for (const char* name : {"att_kp", "att_kd", "alt_kp", "alt_kd", "alt_ki", "yaw_kp",
-                               "yaw_kd", "pos_kp", "pos_kd"}) {
+      ControllerGains g;
+      for (const auto& [name, gain] : Gains(&g)) {
         gain_factors[name] = LogUniform(rng, r.controller_gain_factor);
       }
     }
@@ -137,12 +145,10 @@ struct ControllerAndSensors {
   }
 
   void ApplyTo(FlightScenario* f) const {
-    ControllerGains& g = f->gains;
-    const std::map<std::string, double*> gains = {
-        {"att_kp", &g.att_kp}, {"att_kd", &g.att_kd}, {"alt_kp", &g.alt_kp},
-        {"alt_kd", &g.alt_kd}, {"alt_ki", &g.alt_ki}, {"yaw_kp", &g.yaw_kp},
-        {"yaw_kd", &g.yaw_kd}, {"pos_kp", &g.pos_kp}, {"pos_kd", &g.pos_kd}};
-    for (const auto& [name, factor] : gain_factors) *gains.at(name) *= factor;
+    for (const auto& [name, gain] : Gains(&f->gains)) {
+      const auto factor = gain_factors.find(name);
+      if (factor != gain_factors.end()) *gain *= factor->second;
+    }
     for (const auto& [column, factor] : noise_factors) f->noise_std[column] *= factor;
   }
 };

@@ -134,6 +134,17 @@ TEST(RandomDraw, OtherControllersAndSensorsChangeOnlyGainsAndNoise) {
   EXPECT_EQ(gains_changed, 15);
 }
 
+// The judged set of discover_controllers.yaml can be rerun: seed 8300 draws
+// the factors its record holds (runs.jsonl of the study, binary f7ec410).
+TEST(RandomDraw, TheControllersJudgedSetDrawsWhatItsRecordsHold) {
+  const StudySpec spec = LoadStudySpec(std::string(COAXID_SOURCE_DIR) +
+                                       "/configs/studies/discover_controllers.yaml");
+  const nlohmann::json& d = DrawRun(spec, 8300).description;
+  EXPECT_DOUBLE_EQ(d["controller_gain_factors"]["att_kp"].get<double>(), 1.0219135239372272);
+  EXPECT_DOUBLE_EQ(d["controller_gain_factors"]["pos_kd"].get<double>(), 1.2669240966382362);
+  EXPECT_DOUBLE_EQ(d["sensor_noise_factors"]["az"].get<double>(), 0.951319203462854);
+}
+
 // Weights none 3, single 8, pair 2, outside 2 (of 15): over 300 seeds each
 // class's count lies within 4 binomial std of its expectation.
 TEST(RandomDraw, DrawsTheTruthClassesAtTheirWeights) {
