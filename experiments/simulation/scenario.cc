@@ -105,15 +105,10 @@ void ParseFlight(const YAML::Node& node, const std::string& where, FlightScenari
   }
   if (const YAML::Node c = node["controller"]) {
     const std::string w = where + ".controller";
-    CheckKeys(c, {"att_kp", "att_kd", "alt_kp", "alt_kd", "alt_ki", "yaw_kp", "yaw_kd", "pos_kp",
-                  "pos_kd", "max_tilt"},
-              w);
-    ControllerGains& g = f->gains;
-    const std::pair<const char*, double*> fields[] = {
-        {"att_kp", &g.att_kp}, {"att_kd", &g.att_kd}, {"alt_kp", &g.alt_kp},
-        {"alt_kd", &g.alt_kd}, {"alt_ki", &g.alt_ki}, {"yaw_kp", &g.yaw_kp},
-        {"yaw_kd", &g.yaw_kd}, {"pos_kp", &g.pos_kp}, {"pos_kd", &g.pos_kd},
-        {"max_tilt", &g.max_tilt}};
+    const auto fields = f->gains.Fields();
+    std::vector<std::string> keys;
+    for (const auto& [key, ptr] : fields) keys.push_back(key);
+    CheckKeys(c, keys, w);
     for (const auto& [key, ptr] : fields) {
       if (c[key]) *ptr = ReadDouble(c[key], w + "." + key);
     }

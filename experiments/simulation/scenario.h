@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/vehicle_config.h"
@@ -72,6 +73,14 @@ struct ControllerGains {
   double yaw_kp = 1.7, yaw_kd = 1.2;         // differential rad/s per rad, per rad/s
   double pos_kp = 0.6, pos_kd = 1.0;         // desired acceleration m/s^2 per m, per m/s
   double max_tilt = 0.15;                    // rad, position loop command limit
+
+  // Every field by its scenario key (controller.*), max_tilt last.
+  std::vector<std::pair<std::string, double*>> Fields() {
+    return {{"att_kp", &att_kp}, {"att_kd", &att_kd}, {"alt_kp", &alt_kp},
+            {"alt_kd", &alt_kd}, {"alt_ki", &alt_ki}, {"yaw_kp", &yaw_kp},
+            {"yaw_kd", &yaw_kd}, {"pos_kp", &pos_kp}, {"pos_kd", &pos_kd},
+            {"max_tilt", &max_tilt}};
+  }
 };
 
 struct Waypoint {

@@ -115,12 +115,14 @@ double LogUniform(Rng& rng, const std::array<double, 2>& range) {
   return std::exp(Uniform(rng, {std::log(range[0]), std::log(range[1])}));
 }
 
-// The controller's gains by name (not the position loop's tilt limit), in
-// the order their factors are drawn.
+// The controller's gains by name, in the order their factors are drawn: every
+// field but the position loop's tilt limit, which is not a gain.
 std::vector<std::pair<std::string, double*>> Gains(ControllerGains* g) {
-  return {{"att_kp", &g->att_kp}, {"att_kd", &g->att_kd}, {"alt_kp", &g->alt_kp},
-          {"alt_kd", &g->alt_kd}, {"alt_ki", &g->alt_ki}, {"yaw_kp", &g->yaw_kp},
-          {"yaw_kd", &g->yaw_kd}, {"pos_kp", &g->pos_kp}, {"pos_kd", &g->pos_kd}};
+  std::vector<std::pair<std::string, double*>> out = g->Fields();
+  out.erase(std::remove_if(out.begin(), out.end(),
+                           [](const auto& field) { return field.first == "max_tilt"; }),
+            out.end());
+  return out;
 }
 
 // Another controller and other sensors than the template's: each gain and

@@ -24,8 +24,8 @@ namespace coaxid {
 // all, the testable ones predicted to remove at least half of
 // min_share_of_excess. Largest predicted share first within each group; a
 // share above 1 (the linearised step would fit the channels below their
-// noise) says the linearisation failed, not that the candidate is promising,
-// and ranks last (measured, seed 8000 of discover_controllers.yaml: an
+// noise) says the linearisation failed, not how promising the candidate is,
+// and ranks last in its group (measured, seed 8000 of discover_controllers.yaml: an
 // undeclared ground effect, Cz at 0; wake_interference "predicted" 406 %
 // and took the slot ground_effect, at 0.6 %, needed).
 std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
