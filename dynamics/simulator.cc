@@ -8,9 +8,23 @@ Simulator::Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
                      const IntegratorOptions& options, const SensitivityOptions& sensitivities,
                      std::vector<int> sensitivity_parameters, SensitivityMethod method)
     : ode_(model, theta, std::move(sensitivity_parameters)),
-      sensitivity_options_(sensitivities) {
+      sensitivity_options_(sensitivities),
+      method_(method) {
   const bool wanted = sensitivities.wrt_initial_state || sensitivities.wrt_parameters;
-  if (wanted && method == SensitivityMethod::kVariationalEquations) {
+  if (wanted && method == SensitivityMethod::kRungeKuttaPerHold) {
+    const int n = ode_.NumStates(), p = sensitivities.wrt_parameters
+                                            ? ode_.NumSensitivityParameters() : 0;
+    columns_ = (sensitivities.wrt_initial_state ? n : 0) + p;
+    integrator_ = std::make_unique<Integrator>(ode_, options);
+    rk_.f0.resize(n);
+    rk_.f1.resize(n);
+    rk_.xm.resize(n);
+    for (Eigen::MatrixXd* A : {&rk_.A0, &rk_.Am, &rk_.A1}) A->setZero(n, n);
+    for (Eigen::MatrixXd* B : {&rk_.B0, &rk_.Bm, &rk_.B1}) B->setZero(n, p);
+    for (Eigen::MatrixXd* K : {&rk_.K1, &rk_.K2, &rk_.K3, &rk_.K4, &rk_.Stage}) {
+      K->setZero(n, columns_);
+    }
+  } else if (wanted && method == SensitivityMethod::kVariationalEquations) {
     variational_ = std::make_unique<VariationalSystem>(ode_, sensitivities.wrt_initial_state,
                                                        sensitivities.wrt_parameters);
     columns_ = variational_->NumColumns();
@@ -51,14 +65,22 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
   // A run is a function of its arguments alone (the same point simulated
   // twice gives the same numbers).
   integrator_->ForgetStepHint();
-  Eigen::VectorXd x = x0;
+  Eigen::VectorXd x = x0, x_start(n);
   Eigen::VectorXd z(variational_ ? variational_->NumStates() : 0);
   for (int k = first; k < last; ++k) {
     const HeldInput& held = out->inputs[k - first];
     ode_.SetInput(held);
     // Restart at every input change: the right-hand side jumps there.
     bool ok;
-    if (variational_) {
+    if (method_ == SensitivityMethod::kRungeKuttaPerHold && with_sensitivities) {
+      x_start = x;
+      ok = integrator_->Reset(inputs.time(k), x) && integrator_->AdvanceTo(inputs.time(k + 1), &x);
+      if (ok && x.allFinite() &&
+          !StepSensitivities(inputs.time(k), inputs.time(k + 1), x_start, x, &S)) {
+        error_ = "sensitivities not finite at t = " + std::to_string(inputs.time(k + 1)) + " s";
+        return false;
+      }
+    } else if (variational_) {
       z.head(n) = x;
       z.tail(z.size() - n) = Eigen::Map<const Eigen::VectorXd>(S.data(), S.size());
       ok = integrator_->Reset(inputs.time(k), z) && integrator_->AdvanceTo(inputs.time(k + 1), &z);
@@ -86,6 +108,39 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
     out->states[i] = x;
   }
   return true;
+}
+
+bool Simulator::StepSensitivities(double t0, double t1, const Eigen::VectorXd& x0,
+                                  const Eigen::VectorXd& x1, Eigen::MatrixXd* S) {
+  RungeKuttaScratch& w = rk_;
+  const int p = static_cast<int>(w.B0.cols());
+  const double h = t1 - t0, tm = t0 + h / 2;
+  Eigen::MatrixXd* no_p = nullptr;
+  // The state at the midpoint: cubic Hermite from both ends' values and slopes.
+  if (!ode_.Rhs(t0, x0.data(), w.f0.data()) || !ode_.Rhs(t1, x1.data(), w.f1.data())) {
+    return false;
+  }
+  w.xm = 0.5 * (x0 + x1) + (h / 8) * (w.f0 - w.f1);
+  if (!ode_.Jacobians(t0, x0.data(), &w.A0, p > 0 ? &w.B0 : no_p) ||
+      !ode_.Jacobians(tm, w.xm.data(), &w.Am, p > 0 ? &w.Bm : no_p) ||
+      !ode_.Jacobians(t1, x1.data(), &w.A1, p > 0 ? &w.B1 : no_p)) {
+    return false;
+  }
+  // dS/dt = A S + [0 | B].
+  auto slope = [p](const Eigen::MatrixXd& A, const Eigen::MatrixXd& B, const Eigen::MatrixXd& s,
+                   Eigen::MatrixXd* k) {
+    k->noalias() = A * s;
+    if (p > 0) k->rightCols(p) += B;
+  };
+  slope(w.A0, w.B0, *S, &w.K1);
+  w.Stage = *S + (h / 2) * w.K1;
+  slope(w.Am, w.Bm, w.Stage, &w.K2);
+  w.Stage = *S + (h / 2) * w.K2;
+  slope(w.Am, w.Bm, w.Stage, &w.K3);
+  w.Stage = *S + h * w.K3;
+  slope(w.A1, w.B1, w.Stage, &w.K4);
+  *S += (h / 6) * (w.K1 + 2 * w.K2 + 2 * w.K3 + w.K4);
+  return S->allFinite();
 }
 
 }  // namespace coaxid

@@ -26,11 +26,20 @@ struct Trajectory {
   std::vector<HeldInput> inputs;                 // each sample's interval as applied
 };
 
-// How sensitivities are computed: CVODES's forward sensitivity module, or
-// CVODE on the state augmented with its variational equations (same
-// equations, one vector; sensitivities follow the state's steps). Both use the
-// autodiff Jacobians of the one model.
-enum class SensitivityMethod { kCvodes, kVariationalEquations };
+// How sensitivities are computed, all from the autodiff Jacobians of the one
+// model:
+// - kCvodes: CVODES's forward sensitivity module;
+// - kVariationalEquations: the integrator on the state augmented with its
+//   variational equations (one vector; sensitivities follow the state's
+//   steps, every stage of every step evaluates the Jacobians);
+// - kRungeKuttaPerHold: the integrator on the state alone, and one classic
+//   Runge-Kutta step per hold interval on the variational equations, with the
+//   Jacobians at the interval's two ends and at its midpoint (the state there
+//   by cubic Hermite interpolation, O(h^4)): three Jacobians an interval
+//   instead of seven or more. Its error, O(h^5) a 5 ms interval, is far below
+//   what a Gauss-Newton step or a Cramer-Rao bound can see
+//   (tests/dynamics/simulator_test.cc; speed in bench/ident/output_error).
+enum class SensitivityMethod { kCvodes, kVariationalEquations, kRungeKuttaPerHold };
 
 class Simulator {
  public:
@@ -65,6 +74,15 @@ class Simulator {
   std::unique_ptr<VariationalSystem> variational_;  // set for kVariationalEquations
   std::unique_ptr<Integrator> integrator_;
   SensitivityOptions sensitivity_options_;
+  SensitivityMethod method_;
+  // kRungeKuttaPerHold: sensitivities of one hold interval [t0, t1] by a
+  // classic RK4 step from *S, given the state at both ends.
+  bool StepSensitivities(double t0, double t1, const Eigen::VectorXd& x0,
+                         const Eigen::VectorXd& x1, Eigen::MatrixXd* S);
+  struct RungeKuttaScratch {
+    Eigen::VectorXd f0, f1, xm;
+    Eigen::MatrixXd A0, Am, A1, B0, Bm, B1, K1, K2, K3, K4, Stage;
+  } rk_;
   int columns_ = 0;
   std::string error_;
 };

@@ -5,12 +5,14 @@ namespace coaxid {
 SimulatorPool::SimulatorPool(const VehicleModel& model, const Eigen::VectorXd& theta,
                              const IntegratorOptions& options,
                              const SensitivityOptions& sensitivities,
-                             std::vector<int> sensitivity_parameters)
+                             std::vector<int> sensitivity_parameters,
+                             SensitivityMethod method)
     : model_(model),
       theta_(theta),
       options_(options),
       sensitivities_(sensitivities),
-      sensitivity_parameters_(std::move(sensitivity_parameters)) {}
+      sensitivity_parameters_(std::move(sensitivity_parameters)),
+      method_(method) {}
 
 SimulatorPool::Lease SimulatorPool::Acquire() {
   {
@@ -23,7 +25,7 @@ SimulatorPool::Lease SimulatorPool::Acquire() {
     ++made_;
   }
   return Lease(this, std::make_unique<Simulator>(model_, theta_, options_, sensitivities_,
-                                                 sensitivity_parameters_));
+                                                 sensitivity_parameters_, method_));
 }
 
 int SimulatorPool::size() const {

@@ -22,7 +22,8 @@ class SimulatorPool {
   // last user set: set it before a run.
   SimulatorPool(const VehicleModel& model, const Eigen::VectorXd& theta,
                 const IntegratorOptions& options, const SensitivityOptions& sensitivities = {},
-                std::vector<int> sensitivity_parameters = {});
+                std::vector<int> sensitivity_parameters = {},
+                SensitivityMethod method = SensitivityMethod::kVariationalEquations);
 
   class Lease {
    public:
@@ -49,6 +50,7 @@ class SimulatorPool {
   IntegratorOptions options_;
   SensitivityOptions sensitivities_;
   std::vector<int> sensitivity_parameters_;
+  SensitivityMethod method_;
   mutable std::mutex mutex_;
   std::vector<std::unique_ptr<Simulator>> idle_;
   int made_ = 0;

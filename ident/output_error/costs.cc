@@ -48,10 +48,11 @@ FlightSegmentCost::FlightSegmentCost(const VehicleModel& model, const FreeParame
 }
 
 SegmentSimulators::SegmentSimulators(const VehicleModel& model, const FreeParameters& free,
-                                     const IntegratorOptions& integrator)
+                                     const IntegratorOptions& integrator,
+                                     SensitivityMethod method)
     : plain(model, free.Theta(free.ScaledValues().data()), integrator),
       sensitive(model, free.Theta(free.ScaledValues().data()), integrator,
-                SensitivityOptions{true, true}, free.indices()) {}
+                SensitivityOptions{true, true}, free.indices(), method) {}
 
 void FlightSegmentCost::SetChannelStd(const std::vector<double>& channel_std) {
   column_weight_.resize(channel_std.size());

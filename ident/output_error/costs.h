@@ -62,7 +62,8 @@ struct SegmentCostTimes {
 // sensitivities to [s_j | the free parameters]: as many as run at once.
 struct SegmentSimulators {
   SegmentSimulators(const VehicleModel& model, const FreeParameters& free,
-                    const IntegratorOptions& integrator);
+                    const IntegratorOptions& integrator,
+                    SensitivityMethod method = SensitivityMethod::kRungeKuttaPerHold);
   mutable SimulatorPool plain, sensitive;
 };
 

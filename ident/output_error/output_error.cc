@@ -188,7 +188,8 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
   a.ceres_segments.resize(logs.size());
   for (const EstimationLog& log : logs) a.paths.push_back(std::make_unique<HeldInputPath>(log.inputs));
   const auto simulators =
-      std::make_shared<const SegmentSimulators>(vehicle.model, free, options.integrator);
+      std::make_shared<const SegmentSimulators>(vehicle.model, free, options.integrator,
+                                                options.sensitivity_method);
   a.balance_costs.resize(logs.size());
   for (size_t i = 0; i < logs.size(); ++i) {
     const EstimationLog& log = logs[i];

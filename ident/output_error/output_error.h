@@ -23,6 +23,7 @@
 #include "core/parameters.h"
 #include "core/statistics.h"
 #include "dynamics/integrator.h"
+#include "dynamics/simulator.h"
 #include "dynamics/vehicle.h"
 #include "ident/estimation_log.h"
 #include "ident/identifiability.h"
@@ -96,6 +97,11 @@ struct OutputErrorOptions {
   // looser tolerance serves (a pass with sensitivities costs 40 % less at
   // rtol 1e-5 than at 1e-7, bench/output_error_bench FlightPass).
   IntegratorOptions coarse_integrator = CoarseIntegrator();
+  // How the segments' sensitivities (the Jacobian) are integrated
+  // (dynamics/simulator.h). The residuals, and so the optimum, do not depend
+  // on it; one RK4 step per hold costs less than the variational equations
+  // on the integrator's steps (bench/experiments/simulation/flight_bench).
+  SensitivityMethod sensitivity_method = SensitivityMethod::kRungeKuttaPerHold;
   int num_threads = 2;
   int balance_rows_per_block = 512;
   // Ceres stopping rules. A relative cost change of 1e-7 is far below what one

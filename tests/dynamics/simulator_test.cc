@@ -200,9 +200,10 @@ TEST_P(SimulatorSensitivities, EqualFiniteDifferencesOfWholeSimulations) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(BothMethods, SimulatorSensitivities,
+INSTANTIATE_TEST_SUITE_P(EveryMethod, SimulatorSensitivities,
                          ::testing::Values(SensitivityMethod::kCvodes,
-                                           SensitivityMethod::kVariationalEquations));
+                                           SensitivityMethod::kVariationalEquations,
+                                           SensitivityMethod::kRungeKuttaPerHold));
 
 TEST(Simulator, ReportsBlownUpParametersInsteadOfCrashing) {
   const Fixture f = MakeFixture();

@@ -63,8 +63,10 @@ void BM_ReplayOneSecond(benchmark::State& state) {
   options.sensitivity_error_control = state.range(1) != 0;
   options.relative_tolerance = 1e-6;
   options.absolute_tolerance = 1e-8;
-  const SensitivityMethod method = state.range(2) ? SensitivityMethod::kVariationalEquations
-                                                  : SensitivityMethod::kCvodes;
+  // range(2): 0 CVODES, 1 variational equations, 2 one RK4 step per hold.
+  const SensitivityMethod method = state.range(2) == 2   ? SensitivityMethod::kRungeKuttaPerHold
+                                   : state.range(2) == 1 ? SensitivityMethod::kVariationalEquations
+                                                         : SensitivityMethod::kCvodes;
   Simulator simulator(Reference().model, theta, options, {sens, sens},
                       sens ? unknowns : std::vector<int>{}, method);
   Trajectory trajectory;
@@ -74,7 +76,10 @@ void BM_ReplayOneSecond(benchmark::State& state) {
   }
   state.SetLabel(std::string(sens ? "with sensitivities (12 x0 + 12 parameters)" : "states only") +
                  (state.range(1) ? ", sensitivities in the error test" : "") +
-                 (sens ? (state.range(2) ? ", variational equations" : ", CVODES") : "") +
+                 (sens ? (state.range(2) == 2   ? ", one RK4 step per hold"
+                          : state.range(2) == 1 ? ", variational equations"
+                                                : ", CVODES")
+                       : "") +
                  (state.range(3) ? ", explicit RK 5(4)" : ", Adams") +
                  ", rtol 1e-6");
 }
@@ -86,6 +91,7 @@ BENCHMARK(BM_ReplayOneSecond)
     ->Args({1, 0, 1, 0})
     ->Args({0, 0, 0, 1})
     ->Args({1, 0, 1, 1})
+    ->Args({1, 0, 2, 1})
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace
