@@ -3,13 +3,27 @@
 #include <glog/logging.h>
 
 namespace coaxid {
+namespace {
+
+// The integrator's options for a state of n augmented with its variational
+// equations.
+IntegratorOptions AugmentedOptions(const IntegratorOptions& options, int n) {
+  IntegratorOptions augmented = options;
+  augmented.newton = false;  // fixed-point iteration on the augmented system
+  // Step sizes follow the state, as with CVODES and sensitivity_error_control off.
+  if (!options.sensitivity_error_control) augmented.error_controlled_states = n;
+  return augmented;
+}
+
+}  // namespace
 
 Simulator::Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
                      const IntegratorOptions& options, const SensitivityOptions& sensitivities,
                      std::vector<int> sensitivity_parameters, SensitivityMethod method)
     : ode_(model, theta, std::move(sensitivity_parameters)),
       sensitivity_options_(sensitivities),
-      method_(method) {
+      method_(method),
+      options_(options) {
   const bool wanted = sensitivities.wrt_initial_state || sensitivities.wrt_parameters;
   if (wanted && method == SensitivityMethod::kRungeKuttaPerHold) {
     const int n = ode_.NumStates(), p = sensitivities.wrt_parameters
@@ -28,11 +42,7 @@ Simulator::Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
     variational_ = std::make_unique<VariationalSystem>(ode_, sensitivities.wrt_initial_state,
                                                        sensitivities.wrt_parameters);
     columns_ = variational_->NumColumns();
-    IntegratorOptions augmented = options;
-    augmented.newton = false;  // fixed-point iteration on the augmented system
-    // Step sizes follow the state, as with CVODES and sensitivity_error_control off.
-    if (!options.sensitivity_error_control) augmented.error_controlled_states = ode_.NumStates();
-    integrator_ = std::make_unique<Integrator>(*variational_, augmented);
+    integrator_ = std::make_unique<Integrator>(*variational_, AugmentedOptions(options, ode_.NumStates()));
   } else {
     integrator_ = std::make_unique<Integrator>(ode_, options, sensitivities);
     columns_ = integrator_->num_sensitivities();
@@ -76,8 +86,10 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
       x_start = x;
       ok = integrator_->Reset(inputs.time(k), x) && integrator_->AdvanceTo(inputs.time(k + 1), &x);
       if (ok && x.allFinite() &&
-          !StepSensitivities(inputs.time(k), inputs.time(k + 1), x_start, x, &S)) {
-        error_ = "sensitivities not finite at t = " + std::to_string(inputs.time(k + 1)) + " s";
+          !StepSensitivities(inputs.time(k), inputs.time(k + 1), x_start, x, &S) &&
+          !FallBack(inputs.time(k), inputs.time(k + 1), x_start, &x, &S)) {
+        error_ = "sensitivities failed between t = " + std::to_string(inputs.time(k)) + " and " +
+                 std::to_string(inputs.time(k + 1)) + " s: " + fallback_->last_error();
         return false;
       }
     } else if (variational_) {
@@ -110,6 +122,25 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
   return true;
 }
 
+bool Simulator::FallBack(double t0, double t1, const Eigen::VectorXd& x0, Eigen::VectorXd* x,
+                         Eigen::MatrixXd* S) {
+  const int n = ode_.NumStates();
+  if (!fallback_) {
+    fallback_system_ = std::make_unique<VariationalSystem>(
+        ode_, sensitivity_options_.wrt_initial_state, sensitivity_options_.wrt_parameters);
+    fallback_ = std::make_unique<Integrator>(*fallback_system_, AugmentedOptions(options_, n));
+  }
+  // S still holds the interval's start: StepSensitivities writes it only on success.
+  Eigen::VectorXd z(n * (1 + columns_));
+  z.head(n) = x0;
+  z.tail(n * columns_) = Eigen::Map<const Eigen::VectorXd>(S->data(), S->size());
+  fallback_->ForgetStepHint();
+  if (!fallback_->Reset(t0, z) || !fallback_->AdvanceTo(t1, &z)) return false;
+  *x = z.head(n);
+  *S = Eigen::Map<const Eigen::MatrixXd>(z.data() + n, n, columns_);
+  return S->allFinite();
+}
+
 bool Simulator::StepSensitivities(double t0, double t1, const Eigen::VectorXd& x0,
                                   const Eigen::VectorXd& x1, Eigen::MatrixXd* S) {
   RungeKuttaScratch& w = rk_;
@@ -139,8 +170,10 @@ bool Simulator::StepSensitivities(double t0, double t1, const Eigen::VectorXd& x
   slope(w.Am, w.Bm, w.Stage, &w.K3);
   w.Stage = *S + h * w.K3;
   slope(w.A1, w.B1, w.Stage, &w.K4);
-  *S += (h / 6) * (w.K1 + 2 * w.K2 + 2 * w.K3 + w.K4);
-  return S->allFinite();
+  w.Stage = *S + (h / 6) * (w.K1 + 2 * w.K2 + 2 * w.K3 + w.K4);
+  if (!w.Stage.allFinite()) return false;
+  S->swap(w.Stage);
+  return true;
 }
 
 }  // namespace coaxid

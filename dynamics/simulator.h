@@ -39,6 +39,10 @@ struct Trajectory {
 //   instead of seven or more. Its error, O(h^5) a 5 ms interval, is far below
 //   what a Gauss-Newton step or a Cramer-Rao bound can see
 //   (tests/dynamics/simulator_test.cc; speed in bench/ident/output_error).
+//   Where the model cannot be differentiated at one of those three points
+//   (a wild trial point, its midpoint state outside the model's domain), that
+//   interval falls back to the variational equations, whose integrator
+//   retries with smaller steps.
 enum class SensitivityMethod { kCvodes, kVariationalEquations, kRungeKuttaPerHold };
 
 class Simulator {
@@ -73,6 +77,15 @@ class Simulator {
   VehicleOde ode_;
   std::unique_ptr<VariationalSystem> variational_;  // set for kVariationalEquations
   std::unique_ptr<Integrator> integrator_;
+  // kRungeKuttaPerHold: the variational equations' integrator for the
+  // intervals where the per-hold step fails (made at the first).
+  IntegratorOptions options_;
+  std::unique_ptr<VariationalSystem> fallback_system_;
+  std::unique_ptr<Integrator> fallback_;
+  // One hold interval [t0, t1] of the state and sensitivities by the
+  // variational equations, from (x, S) at t0.
+  bool FallBack(double t0, double t1, const Eigen::VectorXd& x0, Eigen::VectorXd* x,
+                Eigen::MatrixXd* S);
   SensitivityOptions sensitivity_options_;
   SensitivityMethod method_;
   // kRungeKuttaPerHold: sensitivities of one hold interval [t0, t1] by a
