@@ -206,8 +206,15 @@ AeroLoads<T> VehicleModel::LoadsGivenRotation(const T* theta, const T* input, Se
   // Airflow, eqs. 43-46 (eqs. 21-23): V_tot = V_prop - V_body + V_wind.
   // Eq. 46 with model.md decision 3: V_prop = sqrt(max(radicand, 0)), smoothed.
   const T radicand = T(-2) * rotor_z / (rho * T(M_PI) * theta[kRotorRadius] * theta[kRotorRadius]);
-  const T v_prop = sqrt(T(0.5) * (radicand + sqrt(radicand * radicand +
-                                                  T(kWakeRadicandSmoothing * kWakeRadicandSmoothing))));
+  // radicand + root, written for a negative radicand as eps^2 / (root -
+  // radicand) (the same number): the sum cancels to exactly 0 once
+  // radicand < ~-70, and the outer sqrt's derivative at 0 is infinite (a
+  // rotor pushing down made the Jacobian NaN: study run p0_s33,
+  // docs/discover_confusion.md).
+  const T eps2 = T(kWakeRadicandSmoothing * kWakeRadicandSmoothing);
+  const T root = sqrt(radicand * radicand + eps2);
+  const T positive_part = radicand >= T(0) ? radicand + root : eps2 / (root - radicand);
+  const T v_prop = sqrt(T(0.5) * positive_part);
   const bool flight = setting == Setting::kFlight;
   Vec3<T> v_B = Vec3<T>::Zero(), w_B = Vec3<T>::Zero();
   T height(1e6);  // a balance is far from the floor (sect. 3)

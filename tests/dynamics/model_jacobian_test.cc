@@ -282,5 +282,23 @@ TEST(ModelJacobianTest, ReportsNonFiniteDerivatives) {
   EXPECT_FALSE(DerivativeJacobians(v.model, theta, c.x.data(), HeldInput::Steady(c.input, 0), 0, {kAlpha}, &dfdx, &dfdp));
 }
 
+// A rotor pushing down (a trial point of a refit far from the truth) makes eq. 46's radicand negative and large; written as radicand +
+// sqrt(radicand^2 + eps^2) the smoothed positive part cancelled to exactly 0
+// there, and the wake speed's derivative was NaN (study run p0_s33). The
+// derivative is finite and tiny: v_prop ~ eps / (2 sqrt(-radicand)).
+TEST(ModelJacobianTest, FiniteWhenTheRotorPushesDown) {
+  const Vehicle v = Reference();
+  Eigen::VectorXd theta = v.parameters.Values();
+  // Ten times the thrust, downwards: radicand ~ -450 m^2/s^2 (hover: +45),
+  // well past where the old sum cancelled (~-70).
+  theta[kAlpha] = -10 * theta[kAlpha];
+  theta[kBeta] = -10 * theta[kBeta];
+  const Case c = NearHoverCases(5005u, 1)[0];
+  Eigen::MatrixXd dfdx, dfdp;
+  EXPECT_TRUE(DerivativeJacobians(v.model, theta, c.x.data(), HeldInput::Steady(c.input, 0), 0,
+                                  {kAlpha, kBeta, kCz}, &dfdx, &dfdp));
+  EXPECT_TRUE(dfdx.allFinite() && dfdp.allFinite());
+}
+
 }  // namespace
 }  // namespace coaxid
