@@ -42,7 +42,8 @@ Simulator::Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
     variational_ = std::make_unique<VariationalSystem>(ode_, sensitivities.wrt_initial_state,
                                                        sensitivities.wrt_parameters);
     columns_ = variational_->NumColumns();
-    integrator_ = std::make_unique<Integrator>(*variational_, AugmentedOptions(options, ode_.NumStates()));
+    integrator_ =
+        std::make_unique<Integrator>(*variational_, AugmentedOptions(options, ode_.NumStates()));
   } else {
     integrator_ = std::make_unique<Integrator>(ode_, options, sensitivities);
     columns_ = integrator_->num_sensitivities();
