@@ -40,9 +40,10 @@ struct Trajectory {
 //   what a Gauss-Newton step or a Cramer-Rao bound can see
 //   (tests/dynamics/simulator_test.cc; speed in bench/ident/output_error).
 //   Where the model cannot be differentiated at one of those three points
-//   (a wild trial point, its midpoint state outside the model's domain), that
+//   (a wild trial point, its midpoint state outside the model's domain), or
+//   the interval is too stiff for one RK4 step (h ||A||_inf > 2), that
 //   interval falls back to the variational equations, whose integrator
-//   retries with smaller steps.
+//   takes the state's smaller steps.
 enum class SensitivityMethod { kCvodes, kVariationalEquations, kRungeKuttaPerHold };
 
 class Simulator {
@@ -78,7 +79,8 @@ class Simulator {
   std::unique_ptr<VariationalSystem> variational_;  // set for kVariationalEquations
   std::unique_ptr<Integrator> integrator_;
   // kRungeKuttaPerHold: the variational equations' integrator for the
-  // intervals where the per-hold step fails (made at the first).
+  // intervals where the per-hold step fails or is too stiff (made at the
+  // first).
   IntegratorOptions options_;
   std::unique_ptr<VariationalSystem> fallback_system_;
   std::unique_ptr<Integrator> fallback_;

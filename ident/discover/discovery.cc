@@ -245,8 +245,8 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
         starts += (starts.empty() ? "" : "; ") + r.from + ": cost " +
                   NumberText(r.cost, "%.6g") + (r.kept ? " (kept)" : "");
       }
-      Say(o, "    two starts (the current fit's cost " + NumberText(pass.fit.final_cost, "%.6g") +
-                 "; the lower is kept): " + starts);
+      Say(o, "    " + std::to_string(s.refit_starts.size()) + " starts (the current fit's cost " +
+                 NumberText(pass.fit.final_cost, "%.6g") + "; the lowest is kept): " + starts);
     }
   }
   return refits;

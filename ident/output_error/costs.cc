@@ -88,6 +88,11 @@ const Trajectory* FlightSegmentCost::Simulate(const double* start_state,
   const bool ok = simulator.Run(log_.inputs, first_, last_,
                                 Eigen::Map<const Eigen::VectorXd>(start_state, n_),
                                 &trajectory, path_ ? &start : nullptr);
+  // A failed trial point is routine (the trust region shrinks); -v=1 says why.
+  if (!ok) {
+    VLOG(1) << "segment rows " << first_ << ".." << last_
+            << (sensitivities ? " (with sensitivities)" : "") << ": " << simulator.last_error();
+  }
   if (times_) {
     const long ns =
         std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - run_start).count();
