@@ -562,10 +562,8 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
   // there ended at T_b = 10). Either way the refit runs again from the other
   // start (restarted at the config values <-> at the current fit) and the
   // lower objective is kept.
-  auto above_current_fit = [&](double cost) {
-    return !(cost <= pass.fit.final_cost * (1 + 10 * fit_options.function_tolerance));
-  };
-  const bool above_current = above_current_fit(score->refit_starts.back().cost);
+  const bool above_current = !(score->refit_starts.back().cost <=
+                               pass.fit.final_cost * (1 + 10 * fit_options.function_tolerance));
   const bool at_bound_beside_bounds = refit->usable && !declared_at_bounds.empty() &&
                                       OwnParameterAtBound(score->effect, refit->parameters);
   // A candidate that passes its score test has a step worth starting from
@@ -588,18 +586,19 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
     score->refit_starts.push_back(s2);
     if (s2.kept) *refit = std::move(second);
   }
-  // Every start ended above the current fit's objective, and none was the
-  // current fit itself (the effect at absence, nothing restarted): the refit
-  // runs from there too, where it can only end at or below the current fit
-  // (measured, an undeclared CG offset with wind, flight only, beta at its
-  // bound: the restart ended at 1.9 x the current fit's cost and the
-  // linearised step at 280 x, so the refit was judged to remove -140 % of
-  // the excess and rejected).
+  // Every start ended well above the current fit's objective (a failed
+  // solve, not a near tie), and none was the current fit itself (the effect
+  // at absence, nothing restarted): the refit runs from there too, where it
+  // can end no higher (measured, an undeclared CG offset with wind, flight
+  // only, beta at its bound: the restart ended at 1.9 x the current fit's
+  // cost and the linearised step at 280 x; the refit was reported to remove
+  // -140 % of the excess). A one-sided effect starts at its typical strength
+  // instead of absence (CandidateStart): near the current fit, not on it.
   const bool current_tried = score->refit_starts.size() > 1 && !restarts &&
                              declared_at_bounds.empty();
   double best = INFINITY;
   for (const RefitStart& r : score->refit_starts) best = std::min(best, r.cost);
-  if (above_current_fit(best) && !current_tried) {
+  if (!(best <= 1.01 * pass.fit.final_cost) && !current_tried) {
     OutputErrorResult third = WarmRefit(CandidateStart(pass, *score, {}, false), logs,
                                         fit_options, pass.fitted, pass.fit, false);
     RefitStart s3 = start_of(third, StartText({}, false));
