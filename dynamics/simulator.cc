@@ -18,8 +18,8 @@ IntegratorOptions AugmentedOptions(const IntegratorOptions& options, int n) {
 }
 
 // h ||A||_inf above which an interval's sensitivities leave the RK4 step:
-// below the real-axis stability limit 2.79, where the step's damping of a
-// stiff mode (1/3 a step at 2, exactly e^-2 = 0.14) is still of the right sign and size.
+// below its real-axis stability limit 2.79, where it still damps a mode of
+// h lambda = -2 to 1/3 a step (exactly: e^-2 = 0.14).
 constexpr double kMaxRungeKuttaStiffness = 2.0;
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "experiments/studies/confusion.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <set>
@@ -78,10 +79,22 @@ std::set<std::string> TruthEffectsOfDraw(const nlohmann::json& draw) {
   return effects;
 }
 
+// discover's wall time per run (s): median, 90th percentile and largest.
+// Under a study's parallel jobs, not an idle machine's.
+nlohmann::json SecondsJson(std::vector<double> seconds) {
+  if (seconds.empty()) return {{"runs", 0}};
+  std::sort(seconds.begin(), seconds.end());
+  auto at = [&](double q) {
+    return seconds[static_cast<size_t>(std::lround(q * (seconds.size() - 1)))];
+  };
+  return {{"runs", seconds.size()}, {"median", at(0.5)}, {"p90", at(0.9)}, {"max", seconds.back()}};
+}
+
 nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records) {
   std::map<std::string, std::map<std::string, int>> matrix;  // truth -> added -> runs
   std::map<std::string, Tally> right_by_truth, unexplained_by_truth, visible_by_truth;
   Rates all, flight_only, with_balance;
+  std::vector<double> seconds_all, seconds_flight_only;
   int failed = 0;
   for (const nlohmann::json& r : records) {
     if (!r.contains("draw") || !r["methods"].contains("discover") ||
@@ -103,6 +116,10 @@ nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records) {
     const bool right = truth_class == "outside" ? added.empty() && unexplained : exact;
     const bool visible = m.contains("declared_rms_over_noise") &&
                          m["declared_rms_over_noise"].get<double>() >= kVisibleRmsOverNoise;
+    if (m.contains("seconds")) {
+      seconds_all.push_back(m["seconds"].get<double>());
+      if (!draw["balance"].get<bool>()) seconds_flight_only.push_back(seconds_all.back());
+    }
     visible_by_truth[truth].Add(visible);
     ++matrix[truth][Join(added, "nothing")];
     right_by_truth[truth].Add(right);
@@ -134,7 +151,9 @@ nlohmann::json ConfusionSummary(const std::vector<nlohmann::json>& records) {
           {"matrix", rows},
           {"all", all.Json()},
           {"flight_only", flight_only.Json()},
-          {"flight_and_balance", with_balance.Json()}};
+          {"flight_and_balance", with_balance.Json()},
+          {"seconds", {{"all", SecondsJson(seconds_all)},
+                       {"flight_only", SecondsJson(seconds_flight_only)}}}};
 }
 
 std::string ConfusionMarkdown(const nlohmann::json& c) {
@@ -166,6 +185,17 @@ std::string ConfusionMarkdown(const nlohmann::json& c) {
       "outside_unexplained_visible");
   row("no effect: false alarm", "none_false_alarm");
   row("nothing wrong added (all runs)", "nothing_wrong_added");
+  for (const char* group : {"all", "flight_only"}) {
+    const nlohmann::json& t = c["seconds"][group];
+    if (t["runs"].get<int>() == 0) continue;
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "\ndiscover's wall time, %s (%d runs, the study's jobs in parallel): median "
+                  "%.1f s, 90th percentile %.1f s, largest %.1f s.\n",
+                  std::string(group) == "all" ? "all runs" : "flight only", t["runs"].get<int>(),
+                  t["median"].get<double>(), t["p90"].get<double>(), t["max"].get<double>());
+    md += line;
+  }
   md += "\n| truth | runs | right | visible | unexplained reported | added (runs) |\n"
         "|---|---|---|---|---|---|\n";
   for (const auto& r : c["matrix"]) {

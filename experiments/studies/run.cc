@@ -169,6 +169,7 @@ nlohmann::json DiscoverRun(const StudySpec& spec, const Vehicle& start, const Ve
           {"added", r.added},
           {"unexplained", unexplained},
           {"declared_rms_over_noise", declared_rms_ratio},
+          {"seconds", r.seconds},
           {"parameters", p}};
 }
 

@@ -242,6 +242,26 @@ TEST(Confusion, CountsWhatWasAddedAgainstTheTruth) {
       << ConfusionMarkdown(c);
 }
 
+TEST(Confusion, ReportsDiscoversWallTimePerRun) {
+  std::vector<nlohmann::json> records;
+  for (int k = 1; k <= 11; ++k) {
+    nlohmann::json r = Record("none", "none", k % 2 == 0, {}, false);
+    r["methods"]["discover"]["seconds"] = k;
+    records.push_back(r);
+  }
+  const nlohmann::json c = ConfusionSummary(records);
+  const nlohmann::json& all = c["seconds"]["all"];
+  EXPECT_EQ(all["runs"], 11);
+  EXPECT_EQ(all["median"], 6);
+  EXPECT_EQ(all["p90"], 10);
+  EXPECT_EQ(all["max"], 11);
+  EXPECT_EQ(c["seconds"]["flight_only"]["runs"], 6);  // 1, 3, ..., 11
+  EXPECT_EQ(c["seconds"]["flight_only"]["max"], 11);
+  EXPECT_NE(ConfusionMarkdown(c).find("median 6.0 s, 90th percentile 10.0 s, largest 11.0 s"),
+            std::string::npos)
+      << ConfusionMarkdown(c);
+}
+
 // The per-method discover line of a randomised study judges each run
 // against its own draw: before, it judged every run against the spec's
 // truth (none), and called 48 of the 60 runs of
