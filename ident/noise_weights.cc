@@ -1,5 +1,6 @@
 #include "ident/noise_weights.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <glog/logging.h>
@@ -95,6 +96,22 @@ NoiseWeights NoiseFromResiduals(const std::vector<EstimationLog>& logs,
     }
   }
   return Finish(acc);
+}
+
+NoiseWeights NoiseFromPredictions(const std::vector<EstimationLog>& logs,
+                                  const std::vector<Eigen::MatrixXd>& predictions) {
+  CHECK_EQ(logs.size(), predictions.size());
+  std::vector<Eigen::MatrixXd> residuals;
+  for (size_t i = 0; i < logs.size(); ++i) residuals.push_back(logs[i].values - predictions[i]);
+  return NoiseFromResiduals(logs, residuals);
+}
+
+double MaxRelativeChange(const NoiseWeights& old_noise, const NoiseWeights& new_noise) {
+  double change = 0;
+  for (const auto& [name, std] : new_noise.std) {
+    change = std::max(change, std::fabs(std / old_noise.For(name) - 1));
+  }
+  return change;
 }
 
 }  // namespace coaxid

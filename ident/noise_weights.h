@@ -32,4 +32,13 @@ NoiseWeights NoiseFromData(const std::vector<EstimationLog>& logs);
 NoiseWeights NoiseFromResiduals(const std::vector<EstimationLog>& logs,
                                 const std::vector<Eigen::MatrixXd>& residuals);
 
+// The same from a model's predictions of the logs (residuals = measured -
+// predicted).
+NoiseWeights NoiseFromPredictions(const std::vector<EstimationLog>& logs,
+                                  const std::vector<Eigen::MatrixXd>& predictions);
+
+// max over channels of |new std / old std - 1|: how far a relaxation moves
+// the weights.
+double MaxRelativeChange(const NoiseWeights& old_noise, const NoiseWeights& new_noise);
+
 }  // namespace coaxid

@@ -24,6 +24,93 @@ CompressedSegmentCost::CompressedSegmentCost(std::unique_ptr<FlightSegmentCost> 
 void CompressedSegmentCost::SetChannelStd(const std::vector<double>& channel_std) {
   segment_->SetChannelStd(channel_std);
   kept_.valid = false;
+  trial_.valid = false;
+}
+
+bool CompressedSegmentCost::At(double const* const* parameters, const Eigen::VectorXd& start_state,
+                               const Eigen::VectorXd& theta_scaled,
+                               const Eigen::VectorXd& next_state) const {
+  const int P = n_ - states_;
+  return Eigen::Map<const Eigen::VectorXd>(parameters[0], states_) == start_state &&
+         Eigen::Map<const Eigen::VectorXd>(parameters[1], P) == theta_scaled &&
+         (!segment_->has_next() ||
+          Eigen::Map<const Eigen::VectorXd>(parameters[2], states_) == next_state);
+}
+
+bool CompressedSegmentCost::EvaluateTrial(double const* const* parameters) const {
+  const int P = n_ - states_;
+  const int m = segment_->num_residuals(), m_out = segment_->NumOutputResiduals();
+  const int continuity = m - m_out;
+  thread_local Eigen::VectorXd r;
+  r.resize(m);
+  trial_.ok = segment_->Evaluate(parameters, r.data(), nullptr);
+  if (trial_.ok) {
+    trial_.residuals.resize(num_residuals());
+    trial_.residuals.head(n_).setZero();
+    trial_.residuals[n_] = r.head(m_out).norm();
+    trial_.residuals.tail(continuity) = r.tail(continuity);
+  }
+  trial_.start_state = Eigen::Map<const Eigen::VectorXd>(parameters[0], states_);
+  trial_.theta_scaled = Eigen::Map<const Eigen::VectorXd>(parameters[1], P);
+  if (segment_->has_next()) {
+    trial_.next_state = Eigen::Map<const Eigen::VectorXd>(parameters[2], states_);
+  }
+  trial_.valid = true;
+  return trial_.ok;
+}
+
+bool CompressedSegmentCost::EvaluateKept(double const* const* parameters) const {
+  const bool has_next = segment_->has_next();
+  const int P = n_ - states_;
+  const int m = segment_->num_residuals(), m_out = segment_->NumOutputResiduals();
+  const int continuity = m - m_out;
+  thread_local RowMajor J_state, J_theta, J_next;
+  thread_local Eigen::VectorXd r;
+  J_state.resize(m, states_);
+  J_theta.resize(m, P);
+  J_next.resize(has_next ? m : 0, states_);
+  r.resize(m);
+  double* full[] = {J_state.data(), J_theta.data(), has_next ? J_next.data() : nullptr};
+  if (!segment_->Evaluate(parameters, r.data(), full)) return false;
+  Eigen::MatrixXd A(m_out, n_);
+  A.leftCols(states_) = J_state.topRows(m_out);
+  A.rightCols(P) = J_theta.topRows(m_out);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
+  const Eigen::VectorXd qtr = qr.householderQ().adjoint() * r.head(m_out);
+  kept_.residuals.resize(num_residuals());
+  kept_.residuals.head(n_) = qtr.head(n_);
+  kept_.residuals[n_] = qtr.tail(m_out - n_).norm();  // |Q2^T r|
+  kept_.residuals.tail(continuity) = r.tail(continuity);
+  kept_.R = qr.matrixQR().topRows(n_).triangularView<Eigen::Upper>();
+  kept_.continuity_state = J_state.bottomRows(continuity);
+  kept_.continuity_theta = J_theta.bottomRows(continuity);
+  kept_.continuity_next =
+      has_next ? Eigen::MatrixXd(J_next.bottomRows(continuity)) : Eigen::MatrixXd();
+  kept_.start_state = Eigen::Map<const Eigen::VectorXd>(parameters[0], states_);
+  kept_.theta_scaled = Eigen::Map<const Eigen::VectorXd>(parameters[1], P);
+  if (has_next) kept_.next_state = Eigen::Map<const Eigen::VectorXd>(parameters[2], states_);
+  kept_.valid = true;
+  return true;
+}
+
+void CompressedSegmentCost::Prepare(double const* const* parameters, bool jacobians) const {
+  if (!compressed_) {
+    // Served by the segment's own cache of its last simulation (not its
+    // sensitivities: those are asked for again).
+    if (!jacobians) {
+      thread_local Eigen::VectorXd r;
+      r.resize(segment_->num_residuals());
+      segment_->Evaluate(parameters, r.data(), nullptr);
+    }
+    return;
+  }
+  if (kept_.valid && At(parameters, kept_.start_state, kept_.theta_scaled, kept_.next_state)) return;
+  if (jacobians) {
+    EvaluateKept(parameters);
+  } else if (!(trial_.valid &&
+               At(parameters, trial_.start_state, trial_.theta_scaled, trial_.next_state))) {
+    EvaluateTrial(parameters);
+  }
 }
 
 bool CompressedSegmentCost::Evaluate(double const* const* parameters, double* residuals,
@@ -31,53 +118,20 @@ bool CompressedSegmentCost::Evaluate(double const* const* parameters, double* re
   if (!compressed_) return segment_->Evaluate(parameters, residuals, jacobians);
   const bool has_next = segment_->has_next();
   const int P = n_ - states_;
-  const int m = segment_->num_residuals(), m_out = segment_->NumOutputResiduals();
-  const int continuity = m - m_out;
+  const int continuity = segment_->num_residuals() - segment_->NumOutputResiduals();
   const bool want = jacobians && (jacobians[0] || jacobians[1] || (has_next && jacobians[2]));
   const bool at_kept =
-      kept_.valid &&
-      Eigen::Map<const Eigen::VectorXd>(parameters[0], states_) == kept_.start_state &&
-      Eigen::Map<const Eigen::VectorXd>(parameters[1], P) == kept_.theta_scaled &&
-      (!has_next || Eigen::Map<const Eigen::VectorXd>(parameters[2], states_) ==
-                        kept_.next_state);
+      kept_.valid && At(parameters, kept_.start_state, kept_.theta_scaled, kept_.next_state);
   if (!want && !at_kept) {
-    thread_local Eigen::VectorXd r;
-    r.resize(m);
-    if (!segment_->Evaluate(parameters, r.data(), nullptr)) return false;
-    Eigen::Map<Eigen::VectorXd> out(residuals, num_residuals());
-    out.head(n_).setZero();
-    out[n_] = r.head(m_out).norm();
-    out.tail(continuity) = r.tail(continuity);
+    if (!(trial_.valid &&
+          At(parameters, trial_.start_state, trial_.theta_scaled, trial_.next_state))) {
+      EvaluateTrial(parameters);
+    }
+    if (!trial_.ok) return false;
+    Eigen::Map<Eigen::VectorXd>(residuals, num_residuals()) = trial_.residuals;
     return true;
   }
-  if (!at_kept) {
-    thread_local RowMajor J_state, J_theta, J_next;
-    thread_local Eigen::VectorXd r;
-    J_state.resize(m, states_);
-    J_theta.resize(m, P);
-    J_next.resize(has_next ? m : 0, states_);
-    r.resize(m);
-    double* full[] = {J_state.data(), J_theta.data(), has_next ? J_next.data() : nullptr};
-    if (!segment_->Evaluate(parameters, r.data(), full)) return false;
-    Eigen::MatrixXd A(m_out, n_);
-    A.leftCols(states_) = J_state.topRows(m_out);
-    A.rightCols(P) = J_theta.topRows(m_out);
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
-    const Eigen::VectorXd qtr = qr.householderQ().adjoint() * r.head(m_out);
-    kept_.residuals.resize(num_residuals());
-    kept_.residuals.head(n_) = qtr.head(n_);
-    kept_.residuals[n_] = qtr.tail(m_out - n_).norm();  // |Q2^T r|
-    kept_.residuals.tail(continuity) = r.tail(continuity);
-    kept_.R = qr.matrixQR().topRows(n_).triangularView<Eigen::Upper>();
-    kept_.continuity_state = J_state.bottomRows(continuity);
-    kept_.continuity_theta = J_theta.bottomRows(continuity);
-    kept_.continuity_next = has_next ? Eigen::MatrixXd(J_next.bottomRows(continuity))
-                                     : Eigen::MatrixXd();
-    kept_.start_state = Eigen::Map<const Eigen::VectorXd>(parameters[0], states_);
-    kept_.theta_scaled = Eigen::Map<const Eigen::VectorXd>(parameters[1], P);
-    if (has_next) kept_.next_state = Eigen::Map<const Eigen::VectorXd>(parameters[2], states_);
-    kept_.valid = true;
-  }
+  if (!at_kept && !EvaluateKept(parameters)) return false;
   Eigen::Map<Eigen::VectorXd>(residuals, num_residuals()) = kept_.residuals;
   if (!jacobians) return true;
   const int rows = num_residuals();

@@ -19,7 +19,7 @@
 // kept (n + 1 rows, not the segment's sensitivities) and served again at
 // that point (a noise relaxation re-solves from the previous solution);
 // new channel weights (SetChannelStd here, never on the segment itself)
-// drop it.
+// drop it. So is the last evaluation without Jacobians (a trial point).
 #pragma once
 
 #include <memory>
@@ -39,6 +39,12 @@ class CompressedSegmentCost : public ceres::CostFunction {
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
+
+  // Evaluates the block at `parameters` (with its Jacobian if `jacobians`)
+  // and keeps the result, so that Evaluate there only copies it out: how
+  // ParallelSegmentEvaluation runs the segments side by side before Ceres
+  // asks for them one after the other.
+  void Prepare(double const* const* parameters, bool jacobians) const;
 
   FlightSegmentCost* segment() const { return segment_.get(); }
   bool compressed() const { return compressed_; }
@@ -62,6 +68,21 @@ class CompressedSegmentCost : public ceres::CostFunction {
     Eigen::MatrixXd continuity_state, continuity_theta, continuity_next;
   };
   mutable Kept kept_;
+  // The last evaluation without Jacobians (a trial point): its point and
+  // residuals (n + 1 + continuity rows), served again there.
+  struct KeptResiduals {
+    bool valid = false, ok = false;
+    Eigen::VectorXd start_state, theta_scaled, next_state;
+    Eigen::VectorXd residuals;
+  };
+  mutable KeptResiduals trial_;
+  // True if the point `parameters` is (start_state, theta_scaled, next_state).
+  bool At(double const* const* parameters, const Eigen::VectorXd& start_state,
+          const Eigen::VectorXd& theta_scaled, const Eigen::VectorXd& next_state) const;
+  // The compressed block and its Jacobian at `parameters`, into kept_.
+  bool EvaluateKept(double const* const* parameters) const;
+  // The compressed residuals at `parameters` without Jacobians, into trial_.
+  bool EvaluateTrial(double const* const* parameters) const;
 };
 
 }  // namespace coaxid

@@ -18,6 +18,7 @@
 #include "ident/output_error/compressed_segment_cost.h"
 #include "ident/output_error/costs.h"
 #include "ident/output_error/information.h"
+#include "ident/output_error/parallel_segments.h"
 
 namespace coaxid {
 
@@ -81,6 +82,9 @@ std::vector<int> UnobservableStates(const EstimationLog& log, const VehicleModel
 
 // One assembled Ceres problem for a segment schedule.
 struct Assembly {
+  // Runs the segments side by side for a one-thread Ceres (declared before
+  // the problem that points to it, so destroyed after it).
+  std::unique_ptr<ParallelSegmentEvaluation> evaluation;
   std::unique_ptr<ceres::Problem> problem;
   std::vector<FittedSegments> segments;                       // per log
   std::vector<std::vector<FlightSegmentCost*>> segment_costs;  // per log
@@ -171,6 +175,8 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
   Assembly a;
   ceres::Problem::Options problem_options;
   problem_options.enable_fast_removal = false;
+  a.evaluation = std::make_unique<ParallelSegmentEvaluation>(options.num_threads);
+  problem_options.evaluation_callback = a.evaluation.get();
   a.problem = std::make_unique<ceres::Problem>(problem_options);
   a.problem->AddParameterBlock(theta_scaled, free.size());
   const Eigen::VectorXd lower = free.ScaledLower(), upper = free.ScaledUpper();
@@ -241,6 +247,7 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
       std::vector<double*> blocks = {seg.states[j].data(), theta_scaled};
       if (has_next) blocks.push_back(seg.states[j + 1].data());
       a.problem->AddResidualBlock(cost, loss, blocks);
+      a.evaluation->Add(cost, blocks);
     }
   }
   return a;
@@ -295,15 +302,6 @@ std::vector<LogResidualBlocks> ResidualBlocks(const Vehicle& vehicle,
     if (!out[i].segments.empty()) out[i].held_states = UnobservableStates(logs[i], vehicle.model);
   }
   return out;
-}
-
-// max over channels of |new std / old std - 1|.
-double MaxRelativeChange(const NoiseWeights& old_noise, const NoiseWeights& new_noise) {
-  double change = 0;
-  for (const auto& [name, std] : new_noise.std) {
-    change = std::max(change, std::fabs(std / old_noise.For(name) - 1));
-  }
-  return change;
 }
 
 // Position in solve_free of the one parameter free has not (the held one).
@@ -446,7 +444,9 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   // SPARSE_NORMAL_CHOLESKY, same estimates.
   solver_options.linear_solver_type = ceres::SPARSE_SCHUR;
   solver_options.max_num_iterations = options.max_iterations;
-  solver_options.num_threads = options.num_threads;
+  // One thread: the segments run side by side in the problem's evaluation
+  // callback instead (parallel_segments.h), so every run gives the same fit.
+  solver_options.num_threads = 1;
   solver_options.function_tolerance = options.function_tolerance;
   solver_options.parameter_tolerance = options.parameter_tolerance;
   solver_options.gradient_tolerance = options.gradient_tolerance;
@@ -482,11 +482,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     if (relaxation) {
       // Output-error relaxation: new weights from the last solve's residuals,
       // the same problem solved again from its solution.
-      std::vector<Eigen::MatrixXd> residuals;
-      for (size_t i = 0; i < logs.size(); ++i) {
-        residuals.push_back(logs[i].values - previous_predictions[i]);
-      }
-      const NoiseWeights relaxed = NoiseFromResiduals(logs, residuals);
+      const NoiseWeights relaxed = NoiseFromPredictions(logs, previous_predictions);
       const double change = MaxRelativeChange(noise, relaxed);
       if (options.progress) {
         char line[160];
@@ -765,7 +761,7 @@ std::vector<Eigen::MatrixXd> PredictWithFixedParameters(const Vehicle& vehicle,
       ceres::Solver::Options so;
       so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
       so.max_num_iterations = 50;
-      so.num_threads = options.num_threads;
+      so.num_threads = 1;  // the segments run side by side in the callback
       so.logging_type = ceres::SILENT;
       ceres::Solver::Summary summary;
       ceres::Solve(so, a.problem.get(), &summary);

@@ -3,6 +3,7 @@
 #include "ident/output_error/compressed_segment_cost.h"
 
 #include <memory>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -76,6 +77,51 @@ TEST(CompressedSegmentCost, GivesTheFullBlocksNormalEquationsAndCost) {
   ASSERT_TRUE(compressed.Evaluate(parameters, r.data(), nullptr));
   ASSERT_TRUE(full->Evaluate(parameters, r_full.data(), nullptr));
   EXPECT_NEAR(r.squaredNorm(), r_full.squaredNorm(), 1e-12 * r_full.squaredNorm());
+}
+
+// What ParallelSegmentEvaluation relies on: a block prepared at a point (on
+// any thread) and then evaluated there gives exactly what a block evaluated
+// there from scratch gives, with or without Jacobians; preparing at one point
+// and evaluating at another computes the other.
+TEST(CompressedSegmentCost, APreparedBlockEqualsOneEvaluatedFromScratch) {
+  const Vehicle vehicle = LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
+  const FreeParameters free(vehicle.parameters);
+  FlightScenario scenario;
+  scenario.duration_s = 1.5;
+  scenario.excitation.start_s = 0.0;
+  const EstimationLog log = MakeEstimationLog(SimulateFlight(vehicle, scenario, 8));
+  const std::vector<double> channel_std(log.NumChannels(), 0.01);
+  const int P = free.size();
+  auto block = [&] {
+    return std::make_unique<CompressedSegmentCost>(std::make_unique<FlightSegmentCost>(
+        vehicle.model, free, log, 20, 220, true, channel_std, 1e-2,
+        OutputErrorOptions::DefaultIntegrator()));
+  };
+  Eigen::VectorXd s0 = InitialStateFromLog(log, 20), s1 = InitialStateFromLog(log, 220);
+  s0[kW] += 0.05;
+  Eigen::VectorXd theta = free.ScaledValues() * 1.05;
+  const double* parameters[] = {s0.data(), theta.data(), s1.data()};
+  const auto prepared = block();
+  const auto fresh = block();
+  // Jacobians: prepared on another thread, as the callback does.
+  std::thread([&] { prepared->Prepare(parameters, true); }).join();
+  const Block a = EvaluateBlock(*prepared, parameters, P);
+  const Block b = EvaluateBlock(*fresh, parameters, P);
+  EXPECT_TRUE((a.r.array() == b.r.array()).all());
+  EXPECT_TRUE((a.J.array() == b.J.array()).all());
+  // A trial point (no Jacobians), then a point it was not prepared at.
+  const int m = prepared->num_residuals();
+  Eigen::VectorXd r_prepared(m), r_fresh(m);
+  theta[1] *= 1.02;
+  std::thread([&] { prepared->Prepare(parameters, false); }).join();
+  ASSERT_TRUE(prepared->Evaluate(parameters, r_prepared.data(), nullptr));
+  ASSERT_TRUE(fresh->Evaluate(parameters, r_fresh.data(), nullptr));
+  EXPECT_TRUE((r_prepared.array() == r_fresh.array()).all());
+  EXPECT_GT((r_prepared - b.r).norm(), 0);  // a different point: different residuals
+  theta[2] *= 1.02;
+  ASSERT_TRUE(prepared->Evaluate(parameters, r_prepared.data(), nullptr));
+  ASSERT_TRUE(fresh->Evaluate(parameters, r_fresh.data(), nullptr));
+  EXPECT_TRUE((r_prepared.array() == r_fresh.array()).all());
 }
 
 }  // namespace
