@@ -33,7 +33,6 @@
 // explains in the direction the bound blocks).
 #pragma once
 
-#include <functional>
 #include <limits>
 #include <map>
 #include <string>
@@ -52,6 +51,7 @@ struct RefitStart {
   double cost;          // the fit's objective (output and continuity residuals); inf: failed
   double weighted_rss;  // of the outputs, at the current fit's noise weights
   bool kept;
+  double seconds = 0;   // wall time of this start's solve
 };
 
 struct CandidateScore {

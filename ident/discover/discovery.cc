@@ -243,7 +243,8 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
       std::string starts;
       for (const RefitStart& r : s.refit_starts) {
         starts += (starts.empty() ? "" : "; ") + r.from + ": cost " +
-                  NumberText(r.cost, "%.6g") + (r.kept ? " (kept)" : "");
+                  NumberText(r.cost, "%.6g") + " in " + NumberText(r.seconds, "%.1f s") +
+                  (r.kept ? " (kept)" : "");
       }
       Say(o, "    " + std::to_string(s.refit_starts.size()) + " starts (the current fit's cost " +
                  NumberText(pass.fit.final_cost, "%.6g") + "; the lowest is kept): " + starts);
