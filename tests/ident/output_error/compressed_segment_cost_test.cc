@@ -33,22 +33,39 @@ Block EvaluateBlock(const ceres::CostFunction& cost, const double* const* parame
   return b;
 }
 
-TEST(CompressedSegmentCost, GivesTheFullBlocksNormalEquationsAndCost) {
-  const Vehicle vehicle = LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
-  const FreeParameters free(vehicle.parameters);
-  FlightScenario scenario;
-  scenario.duration_s = 1.5;
-  scenario.excitation.start_s = 0.0;
-  const EstimationLog log = MakeEstimationLog(SimulateFlight(vehicle, scenario, 7));
-  const std::vector<double> channel_std(log.NumChannels(), 0.01);
-  const int first = 20, last = 220, P = free.size();
-  auto segment = [&] {
+// A 1 s segment (rows 20-220) of a simulated 1.5 s flight of the config
+// vehicle, every channel weighted by 0.01.
+struct OneSegment {
+  explicit OneSegment(uint64_t seed)
+      : vehicle(LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml")),
+        free(vehicle.parameters),
+        log(MakeEstimationLog(SimulateFlight(vehicle, Scenario(), seed))),
+        channel_std(log.NumChannels(), 0.01) {}
+  static FlightScenario Scenario() {
+    FlightScenario scenario;
+    scenario.duration_s = 1.5;
+    scenario.excitation.start_s = 0.0;
+    return scenario;
+  }
+  std::unique_ptr<FlightSegmentCost> Cost() const {
     return std::make_unique<FlightSegmentCost>(vehicle.model, free, log, first, last, true,
                                                channel_std, 1e-2,
                                                OutputErrorOptions::DefaultIntegrator());
-  };
-  const auto full = segment();
-  const CompressedSegmentCost compressed(segment());
+  }
+  const Vehicle vehicle;
+  const FreeParameters free;
+  const EstimationLog log;
+  const std::vector<double> channel_std;
+  const int first = 20, last = 220;
+};
+
+TEST(CompressedSegmentCost, GivesTheFullBlocksNormalEquationsAndCost) {
+  const OneSegment one(7);
+  const EstimationLog& log = one.log;
+  const int first = one.first, last = one.last, P = one.free.size();
+  const FreeParameters& free = one.free;
+  const auto full = one.Cost();
+  const CompressedSegmentCost compressed(one.Cost());
   ASSERT_TRUE(compressed.compressed());
   EXPECT_EQ(compressed.num_residuals(), kNumStates + P + 1 + kNumStates);
   ASSERT_GT(full->num_residuals(), 20 * compressed.num_residuals());
@@ -84,22 +101,13 @@ TEST(CompressedSegmentCost, GivesTheFullBlocksNormalEquationsAndCost) {
 // there from scratch gives, with or without Jacobians; preparing at one point
 // and evaluating at another computes the other.
 TEST(CompressedSegmentCost, APreparedBlockEqualsOneEvaluatedFromScratch) {
-  const Vehicle vehicle = LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
-  const FreeParameters free(vehicle.parameters);
-  FlightScenario scenario;
-  scenario.duration_s = 1.5;
-  scenario.excitation.start_s = 0.0;
-  const EstimationLog log = MakeEstimationLog(SimulateFlight(vehicle, scenario, 8));
-  const std::vector<double> channel_std(log.NumChannels(), 0.01);
-  const int P = free.size();
-  auto block = [&] {
-    return std::make_unique<CompressedSegmentCost>(std::make_unique<FlightSegmentCost>(
-        vehicle.model, free, log, 20, 220, true, channel_std, 1e-2,
-        OutputErrorOptions::DefaultIntegrator()));
-  };
-  Eigen::VectorXd s0 = InitialStateFromLog(log, 20), s1 = InitialStateFromLog(log, 220);
+  const OneSegment one(8);
+  const int P = one.free.size();
+  auto block = [&] { return std::make_unique<CompressedSegmentCost>(one.Cost()); };
+  Eigen::VectorXd s0 = InitialStateFromLog(one.log, one.first);
+  Eigen::VectorXd s1 = InitialStateFromLog(one.log, one.last);
   s0[kW] += 0.05;
-  Eigen::VectorXd theta = free.ScaledValues() * 1.05;
+  Eigen::VectorXd theta = one.free.ScaledValues() * 1.05;
   const double* parameters[] = {s0.data(), theta.data(), s1.data()};
   const auto prepared = block();
   const auto fresh = block();
