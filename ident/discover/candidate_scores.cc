@@ -499,8 +499,8 @@ Vehicle CandidateStart(const CandidatePass& pass, const CandidateScore& score,
 // move by more than its tolerance. True if *fit was replaced. The new
 // weights come from the fit's own predictions: a solve at the old weights
 // first (the relaxation of FitOutputError) would only continue the fit
-// (measured, undeclared ground effect, flight only: 20 more iterations, 5-13
-// s, for each refit).
+// (measured, undeclared ground effect, flight only: 20 more iterations for
+// each refit, about as long as the reweighted solve itself).
 bool Reweighted(const Vehicle& model, const std::vector<EstimationLog>& logs,
                 const OutputErrorOptions& fit_options, OutputErrorResult* fit) {
   if (fit_options.noise_relaxations < 1 || !fit->usable) return false;
