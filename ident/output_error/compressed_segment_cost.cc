@@ -120,18 +120,13 @@ bool CompressedSegmentCost::Evaluate(double const* const* parameters, double* re
   const int P = n_ - states_;
   const int continuity = segment_->num_residuals() - segment_->NumOutputResiduals();
   const bool want = jacobians && (jacobians[0] || jacobians[1] || (has_next && jacobians[2]));
-  const bool at_kept =
-      kept_.valid && At(parameters, kept_.start_state, kept_.theta_scaled, kept_.next_state);
-  if (!want && !at_kept) {
-    if (!(trial_.valid &&
-          At(parameters, trial_.start_state, trial_.theta_scaled, trial_.next_state))) {
-      EvaluateTrial(parameters);
-    }
-    if (!trial_.ok) return false;
+  Prepare(parameters, want);  // a no-op where the callback already prepared this point
+  if (!(kept_.valid && At(parameters, kept_.start_state, kept_.theta_scaled, kept_.next_state))) {
+    // Not at the kept block: the Jacobian's evaluation failed, or a trial point.
+    if (want || !trial_.ok) return false;
     Eigen::Map<Eigen::VectorXd>(residuals, num_residuals()) = trial_.residuals;
     return true;
   }
-  if (!at_kept && !EvaluateKept(parameters)) return false;
   Eigen::Map<Eigen::VectorXd>(residuals, num_residuals()) = kept_.residuals;
   if (!jacobians) return true;
   const int rows = num_residuals();
