@@ -15,6 +15,7 @@
 #include "core/stopwatch.h"
 #include "dynamics/outputs.h"
 #include "ident/free_parameters.h"
+#include "ident/output_error/active_bounds.h"
 #include "ident/output_error/compressed_segment_cost.h"
 #include "ident/output_error/costs.h"
 #include "ident/output_error/information.h"
@@ -537,23 +538,29 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     OutputErrorProgress callback(options.progress, stage_name, start, total_rows,
                                  solver_options.function_tolerance);
     solver_options.callbacks = {&callback};
-    ceres::Solver::Summary summary;
     const auto solve_start = Clock::now();
-    ceres::Solve(solver_options, a.problem.get(), &summary);
+    const BoundedSolveSummary solve = SolveHoldingActiveBounds(
+        solver_options, a.problem.get(), theta_scaled.data(), solve_free.ScaledLower(),
+        solve_free.ScaledUpper());
+    const ceres::Solver::Summary& summary = solve.last;
     integration_seconds += SecondsSince(solve_start);
+    nlohmann::json held = nlohmann::json::array();
+    for (int k : solve.held) held.push_back(solve_free.names()[k]);
     stage_timing.push_back({{"segment_s", segment_s},
-                            {"iterations", summary.iterations.size() - 1},
-                            {"residual_evaluations", summary.num_residual_evaluations},
-                            {"jacobian_evaluations", summary.num_jacobian_evaluations},
-                            {"residual_seconds", summary.residual_evaluation_time_in_seconds},
-                            {"jacobian_seconds", summary.jacobian_evaluation_time_in_seconds},
-                            {"linear_solver_seconds", summary.linear_solver_time_in_seconds},
-                            {"solve_seconds", summary.total_time_in_seconds}});
-    if (stage == 0) result.initial_cost = summary.initial_cost;
-    result.iterations += summary.iterations.size() > 0 ? summary.iterations.size() - 1 : 0;
-    result.final_cost = summary.final_cost;
+                            {"iterations", solve.iterations},
+                            {"solves", solve.solves},
+                            {"held_at_bounds", held},
+                            {"residual_evaluations", solve.residual_evaluations},
+                            {"jacobian_evaluations", solve.jacobian_evaluations},
+                            {"residual_seconds", solve.residual_seconds},
+                            {"jacobian_seconds", solve.jacobian_seconds},
+                            {"linear_solver_seconds", solve.linear_solver_seconds},
+                            {"solve_seconds", solve.solve_seconds}});
+    if (stage == 0) result.initial_cost = solve.initial_cost;
+    result.iterations += solve.iterations;
+    result.final_cost = solve.final_cost;
     result.termination = summary.message;
-    result.hit_iteration_limit = summary.termination_type == ceres::NO_CONVERGENCE;
+    result.hit_iteration_limit = solve.hit_iteration_limit;
     if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() ||
         !theta_scaled.allFinite()) {
       result.usable = false;
