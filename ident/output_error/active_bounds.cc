@@ -9,6 +9,9 @@
 namespace coaxid {
 namespace {
 
+constexpr char kBudgetSpent[] =
+    "Maximum number of iterations reached, with parameters held at their bounds.";
+
 bool AtBound(double x, double bound) {
   return std::isfinite(bound) && std::abs(x - bound) <= 1e-12 * (1 + std::abs(bound));
 }
@@ -109,6 +112,7 @@ BoundedSolveSummary SolveHoldingActiveBounds(ceres::Solver::Options options,
     out.linear_solver_seconds += s.linear_solver_time_in_seconds;
     out.solve_seconds += s.total_time_in_seconds;
     out.last = s;
+    out.message = s.message;
     out.hit_iteration_limit = s.termination_type == ceres::NO_CONVERGENCE;
     if (s.termination_type == ceres::FAILURE || !s.IsSolutionUsable()) break;
     if (!s.iterations.empty()) {
@@ -117,15 +121,16 @@ BoundedSolveSummary SolveHoldingActiveBounds(ceres::Solver::Options options,
       options.initial_trust_region_radius =
           std::min(options.max_trust_region_radius, s.iterations.back().trust_region_radius);
     }
-    const bool pressed = s.termination_type == ceres::USER_SUCCESS && !watch.pressing().empty();
-    if (pressed)
+    if (s.termination_type == ceres::USER_SUCCESS && !watch.pressing().empty()) {
       for (int i : watch.pressing()) held[i] = true;
-    if (!pressed && out.hit_iteration_limit) break;
-    if (out.iterations >= budget) {
-      out.hit_iteration_limit = true;
-      break;
+      if (out.iterations >= budget) {
+        out.hit_iteration_limit = true;  // stopped short of an optimum
+        out.message = kBudgetSpent;
+        break;
+      }
+      continue;
     }
-    if (pressed) continue;
+    if (out.hit_iteration_limit) break;
     // Converged: the Karush-Kuhn-Tucker conditions at the bounds, from the
     // gradient with every coordinate free. A coordinate at a bound whose
     // cost falls outward is held (a projected step can stall on such a
@@ -159,6 +164,11 @@ BoundedSolveSummary SolveHoldingActiveBounds(ceres::Solver::Options options,
       changed = true;
     }
     if (!changed) break;
+    if (out.iterations >= budget) {
+      out.hit_iteration_limit = true;  // not at an optimum, and no iterations left
+      out.message = kBudgetSpent;
+      break;
+    }
   }
   for (int i = 0; i < n; ++i) {
     if (held[i]) out.held.push_back(i);

@@ -28,12 +28,14 @@
 #include <ceres/solver.h>
 
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 namespace coaxid {
 
 struct BoundedSolveSummary {
   ceres::Solver::Summary last;  // the last of the solves
+  std::string message;          // Ceres' message of the last solve, or that the budget ran out
   int solves = 0;
   int iterations = 0;  // over all solves
   double initial_cost = 0, final_cost = 0;

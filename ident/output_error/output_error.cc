@@ -559,7 +559,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     if (stage == 0) result.initial_cost = solve.initial_cost;
     result.iterations += solve.iterations;
     result.final_cost = solve.final_cost;
-    result.termination = summary.message;
+    result.termination = solve.message;
     result.hit_iteration_limit = solve.hit_iteration_limit;
     if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() ||
         !theta_scaled.allFinite()) {

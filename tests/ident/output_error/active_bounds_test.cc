@@ -75,52 +75,73 @@ Eigen::VectorXd EnumeratedSolution(const Eigen::MatrixXd& a, const Eigen::Vector
   return best_x;
 }
 
+// A random problem with strongly correlated columns (a long, narrow valley,
+// where a projected step loses most of its predicted decrease), a random box
+// around the origin and a random start inside it.
+struct BoxDraw {
+  Eigen::MatrixXd a;
+  Eigen::VectorXd b, lower, upper, start;
+};
+
+BoxDraw Draw(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> uniform(0.2, 1.5);
+  BoxDraw d;
+  d.a.resize(kRows, kCols);
+  const Eigen::VectorXd common = Eigen::VectorXd::NullaryExpr(kRows, [&] { return normal(rng); });
+  for (int j = 0; j < kCols; ++j) {
+    for (int i = 0; i < kRows; ++i) d.a(i, j) = common[i] + 0.1 * normal(rng);
+  }
+  d.b = Eigen::VectorXd::NullaryExpr(kRows, [&] { return 3 * normal(rng); });
+  d.lower.resize(kCols);
+  d.upper.resize(kCols);
+  d.start.resize(kCols);
+  for (int i = 0; i < kCols; ++i) {
+    d.lower[i] = -uniform(rng);
+    d.upper[i] = uniform(rng);
+    const double x = d.lower[i] + (d.upper[i] - d.lower[i]) * (0.5 + 0.4 * normal(rng) / 3);
+    d.start[i] = std::min(std::max(x, d.lower[i]), d.upper[i]);
+  }
+  return d;
+}
+
+// Solves the draw from its start with `max_iterations`; *x gets the solution.
+BoundedSolveSummary Solve(const BoxDraw& d, int max_iterations, Eigen::VectorXd* x) {
+  *x = d.start;
+  ceres::Problem problem;
+  problem.AddResidualBlock(new LinearResiduals(d.a, d.b), nullptr, x->data());
+  for (int i = 0; i < kCols; ++i) {
+    problem.SetParameterLowerBound(x->data(), i, d.lower[i]);
+    problem.SetParameterUpperBound(x->data(), i, d.upper[i]);
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = max_iterations;
+  options.function_tolerance = 1e-15;
+  options.parameter_tolerance = 1e-15;
+  options.gradient_tolerance = 1e-15;
+  const BoundedSolveSummary s =
+      SolveHoldingActiveBounds(options, &problem, x->data(), d.lower, d.upper);
+  EXPECT_FALSE(problem.HasManifold(x->data()));  // the block is left as it was given
+  return s;
+}
+
 TEST(SolveHoldingActiveBounds, FindsTheBoxConstrainedLeastSquaresSolution) {
-  // Random problems with strongly correlated columns (a long, narrow valley,
-  // where a projected step loses most of its predicted decrease), random
-  // boxes around the origin, random starts inside them.
   int with_held = 0, with_release = 0;
   for (unsigned seed = 1; seed <= 40; ++seed) {
-    std::mt19937 rng(seed);
-    std::normal_distribution<double> normal;
-    std::uniform_real_distribution<double> uniform(0.2, 1.5);
-    Eigen::MatrixXd a(kRows, kCols);
-    const Eigen::VectorXd common = Eigen::VectorXd::NullaryExpr(kRows, [&] { return normal(rng); });
-    for (int j = 0; j < kCols; ++j) {
-      for (int i = 0; i < kRows; ++i) a(i, j) = common[i] + 0.1 * normal(rng);
-    }
-    const Eigen::VectorXd b = Eigen::VectorXd::NullaryExpr(kRows, [&] { return 3 * normal(rng); });
-    Eigen::VectorXd lower(kCols), upper(kCols), x(kCols);
-    for (int i = 0; i < kCols; ++i) {
-      lower[i] = -uniform(rng);
-      upper[i] = uniform(rng);
-      x[i] = lower[i] + (upper[i] - lower[i]) * (0.5 + 0.4 * normal(rng) / 3);
-      x[i] = std::min(std::max(x[i], lower[i]), upper[i]);
-    }
-    ceres::Problem problem;
-    problem.AddResidualBlock(new LinearResiduals(a, b), nullptr, x.data());
-    for (int i = 0; i < kCols; ++i) {
-      problem.SetParameterLowerBound(x.data(), i, lower[i]);
-      problem.SetParameterUpperBound(x.data(), i, upper[i]);
-    }
-    ceres::Solver::Options options;
-    options.linear_solver_type = ceres::DENSE_QR;
-    options.max_num_iterations = 200;
-    options.function_tolerance = 1e-15;
-    options.parameter_tolerance = 1e-15;
-    options.gradient_tolerance = 1e-15;
-    const BoundedSolveSummary s =
-        SolveHoldingActiveBounds(options, &problem, x.data(), lower, upper);
-    const Eigen::VectorXd truth = EnumeratedSolution(a, b, lower, upper);
+    const BoxDraw d = Draw(seed);
+    Eigen::VectorXd x;
+    const BoundedSolveSummary s = Solve(d, 200, &x);
+    const Eigen::VectorXd truth = EnumeratedSolution(d.a, d.b, d.lower, d.upper);
     ASSERT_EQ(truth.size(), kCols);
     // The valley's narrow direction has curvature ~1e-2 of the wide one: a
     // cost converged to 1e-15 leaves the position good to about 1e-6.
     EXPECT_LT((x - truth).lpNorm<Eigen::Infinity>(), 1e-5) << "seed " << seed;
     EXPECT_FALSE(s.hit_iteration_limit) << "seed " << seed;
-    EXPECT_FALSE(problem.HasManifold(x.data()));  // the block is left as it was given
     for (int i : s.held) {
-      EXPECT_TRUE(x[i] == lower[i] || x[i] == upper[i]) << "seed " << seed;
-      EXPECT_TRUE(truth[i] == lower[i] || truth[i] == upper[i]) << "seed " << seed;
+      EXPECT_TRUE(x[i] == d.lower[i] || x[i] == d.upper[i]) << "seed " << seed;
+      EXPECT_TRUE(truth[i] == d.lower[i] || truth[i] == d.upper[i]) << "seed " << seed;
     }
     with_held += !s.held.empty();
     with_release += !s.released.empty();
@@ -129,6 +150,29 @@ TEST(SolveHoldingActiveBounds, FindsTheBoxConstrainedLeastSquaresSolution) {
   // a coordinate whose multiplier turned out to have the wrong sign.
   EXPECT_GT(with_held, 0);
   EXPECT_GT(with_release, 0);
+}
+
+TEST(SolveHoldingActiveBounds, ClaimsConvergenceOnlyAtTheSolutionAndKeepsToItsBudget) {
+  // Short budgets: every solve either reports the budget spent, or is at
+  // the solution; none takes more iterations than it was given.
+  int short_of_it = 0;
+  for (unsigned seed = 1; seed <= 40; ++seed) {
+    const BoxDraw d = Draw(seed);
+    const Eigen::VectorXd truth = EnumeratedSolution(d.a, d.b, d.lower, d.upper);
+    for (int budget : {1, 2, 4, 8}) {
+      Eigen::VectorXd x;
+      const BoundedSolveSummary s = Solve(d, budget, &x);
+      EXPECT_LE(s.iterations, budget) << "seed " << seed;
+      if (s.hit_iteration_limit) {
+        ++short_of_it;
+        EXPECT_NE(s.message.find("Maximum number of iterations"), std::string::npos) << s.message;
+      } else {
+        EXPECT_LT((x - truth).lpNorm<Eigen::Infinity>(), 1e-5)
+            << "seed " << seed << ", budget " << budget;
+      }
+    }
+  }
+  EXPECT_GT(short_of_it, 0);
 }
 
 }  // namespace
