@@ -16,6 +16,11 @@ bool AtBound(double x, double bound) {
   return std::isfinite(bound) && std::abs(x - bound) <= 1e-12 * (1 + std::abs(bound));
 }
 
+bool AtEitherBound(const double* block, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+                   int i) {
+  return AtBound(block[i], lower[i]) || AtBound(block[i], upper[i]);
+}
+
 // Stops the solve once the same coordinates (among `watched`) have sat at a
 // bound after two successful steps in a row (the start counts as one).
 class PressingOnBounds : public ceres::IterationCallback {
@@ -28,9 +33,7 @@ class PressingOnBounds : public ceres::IterationCallback {
     if (!s.step_is_successful) return ceres::SOLVER_CONTINUE;  // the state did not move
     std::vector<int> at;
     for (int i = 0; i < lower_.size(); ++i) {
-      if (watched_[i] && (AtBound(block_[i], lower_[i]) || AtBound(block_[i], upper_[i]))) {
-        at.push_back(i);
-      }
+      if (watched_[i] && AtEitherBound(block_, lower_, upper_, i)) at.push_back(i);
     }
     if (at.empty() || at != last_) {
       streak_ = at.empty() ? 0 : 1;
@@ -139,6 +142,12 @@ BoundedSolveSummary SolveHoldingActiveBounds(ceres::Solver::Options options,
     // sign), the one falling fastest is released. Gradients below the
     // threshold are noise: moving 1e-3 of the scaled coordinate would lower
     // the cost by less than the solve's own stop on the cost.
+    // Nothing at a bound (held ones always are): nothing to check, and no
+    // gradient evaluation spent on it.
+    bool any_at_bound = false;
+    for (int i = 0; i < n; ++i)
+      any_at_bound = any_at_bound || AtEitherBound(block, lower, upper, i);
+    if (!any_at_bound) break;
     HoldCoordinates(problem, block, std::vector<bool>(n, false));
     std::vector<double> g;
     if (!Gradient(problem, block, &g)) break;
@@ -147,8 +156,8 @@ BoundedSolveSummary SolveHoldingActiveBounds(ceres::Solver::Options options,
     int release = -1;
     double fastest = threshold;
     for (int i = 0; i < n; ++i) {
+      if (!AtEitherBound(block, lower, upper, i)) continue;
       const bool at_lower = AtBound(block[i], lower[i]);
-      if (!at_lower && !AtBound(block[i], upper[i])) continue;
       const double inward = at_lower ? -g[i] : g[i];  // the cost's fall per unit inward
       if (!held[i] && -inward > threshold) {
         held[i] = true;
