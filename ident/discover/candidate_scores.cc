@@ -433,6 +433,19 @@ OutputErrorOptions WarmOptions(const OutputErrorOptions& fit_options, const Vehi
   o.segment_schedule_s = {fit_options.segment_schedule_s.back()};
   o.start_segments = current_fit.segments;
   o.start_segment_state_names = current.model.StateNames();
+  // A fit that needed the scale held in the solve (its scale-free solution
+  // wanted a member beyond its bounds) is refitted with it held: the
+  // scale-free solve from its neighbourhood fails the same move again, and
+  // the fallback then solves once more from the same start (measured,
+  // swashplate_bias truth, flight only, 53 s: 12 such failed solves took
+  // 30 of the run's 116 s of CPU, every one of them thrown away).
+  if (current_fit.scale_held_in_solve) o.scale_free_in_solve = false;
+  // And it goes on with the parameters the fit held at their bounds held
+  // (those a start leaves there; the check at convergence releases any that
+  // the new model pulls inward): the continuations of a fit that pressed
+  // sigma0 and Cz on their bounds spent 5 of their 20 iterations in failed
+  // steps finding them again (ground effect, flight only).
+  o.start_held_at_bounds = current_fit.held_at_bounds;
   return o;
 }
 

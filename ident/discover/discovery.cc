@@ -94,7 +94,11 @@ OutputErrorResult Converged(const Vehicle& model, OutputErrorResult fit,
     Say(options, "discover: the fit stopped at its " + std::to_string(fit_options.max_iterations) +
                      " iterations: continuing it");
     v.parameters = fit.parameters;
-    OutputErrorResult next = WarmRefit(v, logs, fit_options, v, fit);
+    // From the trust region the fit ended with (Ceres would start at 1e4
+    // and shrink it again in failed steps).
+    OutputErrorOptions continued = fit_options;
+    continued.initial_trust_region_radius = fit.trust_region_radius;
+    OutputErrorResult next = WarmRefit(v, logs, continued, v, fit);
     if (!next.usable) break;
     fit = std::move(next);
   }

@@ -22,6 +22,10 @@
 // outward is held too, and of the held ones whose cost falls inward (a
 // Lagrange multiplier of the wrong sign) the fastest is released; the solve
 // goes on until neither happens.
+//
+// A solve can start with coordinates held (`start_held`): a continuation of
+// a solve that ended with them held, which would otherwise find them again
+// in failed and projected steps.
 #pragma once
 
 #include <ceres/problem.h>
@@ -50,11 +54,13 @@ struct BoundedSolveSummary {
 // Solves `problem` like ceres::Solve(options, ...), with options.max_num_iterations
 // the budget of all its solves together. `block` (size lower.size()) is the
 // bounded parameter block, with no manifold of its own; lower and upper are
-// its bounds (infinite: none), as set on the problem. Leaves the block
-// without a manifold.
+// its bounds (infinite: none), as set on the problem. Coordinates in
+// `start_held` that sit at a bound start held (the others are ignored).
+// Leaves the block without a manifold.
 BoundedSolveSummary SolveHoldingActiveBounds(ceres::Solver::Options options,
                                              ceres::Problem* problem, double* block,
                                              const Eigen::VectorXd& lower,
-                                             const Eigen::VectorXd& upper);
+                                             const Eigen::VectorXd& upper,
+                                             const std::vector<int>& start_held = {});
 
 }  // namespace coaxid

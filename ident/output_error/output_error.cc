@@ -36,6 +36,9 @@ bool OutputErrorOptions::IsValid(std::string* why) const {
     return fail("max_iterations must be >= 1");
   }
   if (noise_relaxations < 0) return fail("noise_relaxations must be >= 0");
+  if (!(initial_trust_region_radius >= 0) || !std::isfinite(initial_trust_region_radius)) {
+    return fail("initial_trust_region_radius must be finite and >= 0");
+  }
   if (!(noise_relaxation_tolerance >= 0)) return fail("noise_relaxation_tolerance must be >= 0");
   if (!(continuity_std > 0 && coarse_continuity_std > 0)) {
     return fail("continuity_std must be positive");
@@ -425,6 +428,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   if (!result.gauge.held_member.empty() && options.scale_free_in_solve) {
     solve_parameters.SetEstimated(result.gauge.held_member, true);
   }
+  result.scale_held_in_solve = !result.gauge.held_member.empty() && !options.scale_free_in_solve;
   const FreeParameters solve_free(solve_parameters);
   for (const EstimationLog& log : logs) {
     if (log.kind == LogKind::kFlight &&
@@ -470,6 +474,12 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
   std::vector<Eigen::MatrixXd> previous_predictions;
   double integration_seconds = 0;
   SegmentCostTimes times;
+  std::vector<int> held_coordinates;
+  for (const std::string& name : options.start_held_at_bounds) {
+    const auto& names = solve_free.names();
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it != names.end()) held_coordinates.push_back(static_cast<int>(it - names.begin()));
+  }
   nlohmann::json stage_timing = nlohmann::json::array();
   const int num_stages =
       static_cast<int>(options.segment_schedule_s.size()) + options.noise_relaxations;
@@ -538,14 +548,22 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     OutputErrorProgress callback(options.progress, stage_name, start, total_rows,
                                  solver_options.function_tolerance);
     solver_options.callbacks = {&callback};
+    if (stage == 0 && options.initial_trust_region_radius > 0) {
+      solver_options.initial_trust_region_radius = options.initial_trust_region_radius;
+    } else {
+      solver_options.initial_trust_region_radius = ceres::Solver::Options().initial_trust_region_radius;
+    }
     const auto solve_start = Clock::now();
+    // The active set goes on from the last stage (or the fit continued).
     const BoundedSolveSummary solve = SolveHoldingActiveBounds(
         solver_options, a.problem.get(), theta_scaled.data(), solve_free.ScaledLower(),
-        solve_free.ScaledUpper());
+        solve_free.ScaledUpper(), held_coordinates);
+    held_coordinates = solve.held;
     const ceres::Solver::Summary& summary = solve.last;
     integration_seconds += SecondsSince(solve_start);
     nlohmann::json held = nlohmann::json::array();
     for (int k : solve.held) held.push_back(solve_free.names()[k]);
+    result.held_at_bounds = held.get<std::vector<std::string>>();
     stage_timing.push_back({{"segment_s", segment_s},
                             {"iterations", solve.iterations},
                             {"solves", solve.solves},
@@ -561,6 +579,9 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     result.final_cost = solve.final_cost;
     result.termination = solve.message;
     result.hit_iteration_limit = solve.hit_iteration_limit;
+    if (!summary.iterations.empty()) {
+      result.trust_region_radius = summary.iterations.back().trust_region_radius;
+    }
     if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() ||
         !theta_scaled.allFinite()) {
       result.usable = false;

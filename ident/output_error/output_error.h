@@ -78,6 +78,13 @@ struct OutputErrorOptions {
   // segments, then starts exactly at the previous fit.
   std::vector<FittedSegments> start_segments;
   std::vector<std::string> start_segment_state_names;
+  // A continuation's solver state: the parameters a previous fit ended with
+  // held at their bounds (result.held_at_bounds; those still at a bound
+  // start held, ident/output_error/active_bounds.h), and its trust region
+  // (result.trust_region_radius; 0: Ceres' default, 1e4), for the first
+  // solve.
+  std::vector<std::string> start_held_at_bounds;
+  double initial_trust_region_radius = 0;
   // Continuity residual scale [state units] of the final and of the coarse
   // stages. Small, so segments join up; not tiny, because a stiff penalty
   // makes Levenberg-Marquardt crawl (measured: 1e-4 took 100+ iterations
@@ -136,6 +143,10 @@ struct OutputErrorResult {
   // Not usable because moving the solution onto the held scale would take a
   // member out of its bounds (retry with scale_free_in_solve = false).
   bool scale_move_failed = false;
+  // Solved with the held scale member held in the solve too
+  // (scale_free_in_solve = false with a held member): warm refits from this
+  // fit hold it as well (discover's WarmRefit).
+  bool scale_held_in_solve = false;
   ParameterSet parameters;                  // estimates written back (d not estimated if held)
   IdentifiabilityReport identifiability;    // std, covariance, correlation, null directions
   ScaleGauge gauge;                         // what fixed the scale (model.md decision 8)
@@ -160,6 +171,8 @@ struct OutputErrorResult {
   double initial_cost = 0, final_cost = 0;
   std::string termination;                  // Ceres' reason for stopping
   bool hit_iteration_limit = false;         // the last solve stopped at max_iterations
+  std::vector<std::string> held_at_bounds;  // held at a bound when the last solve ended
+  double trust_region_radius = 0;           // the last solve's trust region at its end
   double seconds = 0;
   nlohmann::json timing;                    // where the time went
 };
