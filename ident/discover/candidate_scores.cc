@@ -440,12 +440,6 @@ OutputErrorOptions WarmOptions(const OutputErrorOptions& fit_options, const Vehi
   // swashplate_bias truth, flight only, 53 s: 12 such failed solves took
   // 30 of the run's 116 s of CPU, every one of them thrown away).
   if (current_fit.scale_held_in_solve) o.scale_free_in_solve = false;
-  // And it goes on with the parameters the fit held at their bounds held
-  // (those a start leaves there; the check at convergence releases any that
-  // the new model pulls inward): the continuations of a fit that pressed
-  // sigma0 and Cz on their bounds spent 5 of their 20 iterations in failed
-  // steps finding them again (ground effect, flight only).
-  o.start_held_at_bounds = current_fit.held_at_bounds;
   return o;
 }
 
