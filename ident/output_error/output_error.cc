@@ -548,11 +548,11 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     OutputErrorProgress callback(options.progress, stage_name, start, total_rows,
                                  solver_options.function_tolerance);
     solver_options.callbacks = {&callback};
-    if (stage == 0 && options.initial_trust_region_radius > 0) {
-      solver_options.initial_trust_region_radius = options.initial_trust_region_radius;
-    } else {
-      solver_options.initial_trust_region_radius = ceres::Solver::Options().initial_trust_region_radius;
-    }
+    // A continued fit's trust region for its first stage; Ceres' default after.
+    solver_options.initial_trust_region_radius =
+        stage == 0 && options.initial_trust_region_radius > 0
+            ? options.initial_trust_region_radius
+            : ceres::Solver::Options().initial_trust_region_radius;
     const auto solve_start = Clock::now();
     // The first stage starts with the active set of the fit it continues.
     // Later stages start with none: a coarse stage's loose stop leaves
@@ -566,13 +566,12 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
         solve_free.ScaledUpper(), stage == 0 ? held_coordinates : std::vector<int>());
     const ceres::Solver::Summary& summary = solve.last;
     integration_seconds += SecondsSince(solve_start);
-    nlohmann::json held = nlohmann::json::array();
-    for (int k : solve.held) held.push_back(solve_free.names()[k]);
-    result.held_at_bounds = held.get<std::vector<std::string>>();
+    result.held_at_bounds.clear();
+    for (int k : solve.held) result.held_at_bounds.push_back(solve_free.names()[k]);
     stage_timing.push_back({{"segment_s", segment_s},
                             {"iterations", solve.iterations},
                             {"solves", solve.solves},
-                            {"held_at_bounds", held},
+                            {"held_at_bounds", result.held_at_bounds},
                             {"residual_evaluations", solve.residual_evaluations},
                             {"jacobian_evaluations", solve.jacobian_evaluations},
                             {"residual_seconds", solve.residual_seconds},
