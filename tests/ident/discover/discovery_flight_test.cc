@@ -157,6 +157,13 @@ TEST_P(DiscoverFlightEffect, FindsItAndOnlyIt) {
   const double after = MeanModelError(r.final, c.channels);
   EXPECT_LT(after, 0.5 * before) << "held-out model error " << before << " -> " << after;
   for (const auto& [name, v] : c.truth) ExpectWithinThreeStd(r, run.truth, c.effect + "." + name);
+  // The held-out share is computed only for refits that pass every gate on
+  // the estimation data; an added effect passed the held-out gate too.
+  for (const CandidateScore& s : r.candidates) {
+    if (s.confirmed) {
+      EXPECT_GE(s.share_of_excess_held_out, Options().min_share_of_excess) << s.effect;
+    }
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(
