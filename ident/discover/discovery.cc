@@ -224,7 +224,8 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     s.excess_removed_all_channels = all.share * all.excess;
     // The held-out prediction (start states fitted per window) is the
     // costliest step after the refit (measured, a 30 s held-out flight under
-    // a model missing three effects: 13 s on one thread, 50 iterations), and
+    // a model missing three effects: 13 s in one of two workers, its cap of
+    // 50 iterations), and
     // decides only a candidate that passes every gate on the estimation data.
     if (!validation.empty() && WhyNotConfirmed(s, level, o).empty()) {
       AddValidation(validation, o, &refits[k].snapshot);
