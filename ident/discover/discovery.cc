@@ -203,6 +203,8 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   fit.progress = nullptr;  // side by side: the loop reports each result
   const int workers = std::max(1, std::min(n, o.fit.num_threads));
   fit.num_threads = std::max(1, o.fit.num_threads / workers);
+  DiscoveryOptions worker_options = o;  // a worker's held-out prediction: its share of the threads
+  worker_options.fit = fit;
   const double level = o.alpha / n;
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
@@ -228,7 +230,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     // 50 iterations), and
     // decides only a candidate that passes every gate on the estimation data.
     if (!validation.empty() && WhyNotConfirmed(s, level, o).empty()) {
-      AddValidation(validation, o, &refits[k].snapshot);
+      AddValidation(validation, worker_options, &refits[k].snapshot);
       s.share_of_excess_held_out =
           ShareOfExcessRemoved(now.validation, refits[k].snapshot.validation,
                                now.validation_residual_tests, s.channels)
