@@ -199,12 +199,13 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   for (int k : shortlist) names += (names.empty() ? "" : ", ") + (*scores)[k].effect;
   Say(o, "discover: refitting " + names + " jointly (" +
              NumberText(SecondsSince(start), "%.1f s") + " so far)");
-  OutputErrorOptions fit = o.fit;
-  fit.progress = nullptr;  // side by side: the loop reports each result
+  // Each worker's fits and held-out predictions: its share of the threads,
+  // silent (side by side: the loop reports each result).
+  DiscoveryOptions worker_options = o;
+  OutputErrorOptions& fit = worker_options.fit;
+  fit.progress = nullptr;
   const int workers = std::max(1, std::min(n, o.fit.num_threads));
   fit.num_threads = std::max(1, o.fit.num_threads / workers);
-  DiscoveryOptions worker_options = o;  // a worker's held-out prediction: its share of the threads
-  worker_options.fit = fit;
   const double level = o.alpha / n;
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
@@ -227,8 +228,8 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     // The held-out prediction (start states fitted per window) is the
     // costliest step after the refit (measured, a 30 s held-out flight under
     // a model missing three effects: 13 s in one of two workers, its cap of
-    // 50 iterations), and
-    // decides only a candidate that passes every gate on the estimation data.
+    // 50 iterations), and it decides only a candidate that passes every gate
+    // on the estimation data.
     if (!validation.empty() && WhyNotConfirmed(s, level, o).empty()) {
       AddValidation(validation, worker_options, &refits[k].snapshot);
       s.share_of_excess_held_out =
