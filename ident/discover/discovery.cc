@@ -103,6 +103,7 @@ nlohmann::json SnapshotJson(const ModelSnapshot& s, bool has_validation) {
 struct CandidateRefit {
   bool ok = false;
   double seconds = 0;
+  double share_of_all_excess = 0;  // of the excess error over all channels, estimation data
   ModelSnapshot snapshot;
   CandidatePass next;
 };
@@ -207,10 +208,18 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   const int workers = std::max(1, std::min(n, o.fit.num_threads));
   fit.num_threads = std::max(1, o.fit.num_threads / workers);
   const double level = o.alpha / n;
+  // The first (in shortlist order) refit that qualifies and removes at least
+  // decisive_share_of_all_excess of the excess over all channels; the refits
+  // ranked below it stop, whichever finished first, so the outcome does not
+  // depend on the timing.
+  std::atomic<int> decided_by{n};
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
     OutputErrorResult refit;
-    if (!RefitCandidate(pass, estimation, fit, declared_at_bounds, &s, &refit, &refits[k].next)) {
+    OutputErrorOptions fit_k = fit;
+    fit_k.stop_requested = [&decided_by, k] { return decided_by.load() < k; };
+    if (!RefitCandidate(pass, estimation, fit_k, declared_at_bounds, &s, &refit,
+                        &refits[k].next)) {
       return;
     }
     Vehicle v = refits[k].next.fitted;
@@ -225,6 +234,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     const ExcessShare all = ShareOfExcessRemoved(now.fit, refits[k].snapshot.fit,
                                                  now.residual_tests, all_channels);
     s.excess_removed_all_channels = all.share * all.excess;
+    refits[k].share_of_all_excess = all.share;
     // The held-out prediction (start states fitted per window) is the
     // costliest step after the refit (measured, a 30 s held-out flight under
     // a model missing three effects: 13 s in one of two workers, its cap of
@@ -238,6 +248,10 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
               .share;
     }
     refits[k].ok = true;
+    if (all.share >= o.decisive_share_of_all_excess && WhyNotConfirmed(s, level, o).empty()) {
+      for (int d = decided_by.load(); k < d && !decided_by.compare_exchange_weak(d, k);) {
+      }
+    }
   };
   auto one = [&](int k) {
     const auto t0 = Clock::now();
@@ -246,7 +260,9 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   };
   std::atomic<int> next{0};
   auto worker = [&] {
-    for (int k = next++; k < n; k = next++) one(k);
+    for (int k = next++; k < n; k = next++) {
+      if (k <= decided_by.load()) one(k);
+    }
   };
   std::vector<std::thread> threads;
   for (int w = 1; w < workers; ++w) threads.emplace_back(worker);
@@ -254,6 +270,19 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   for (std::thread& t : threads) t.join();
   for (int k = 0; k < n; ++k) {
     CandidateScore& s = (*scores)[shortlist[k]];
+    if (k > decided_by.load()) {
+      const CandidateScore& d = (*scores)[shortlist[decided_by.load()]];
+      s.refitted = false;
+      s.refit_starts.clear();
+      s.confirmed = false;
+      s.why_not_confirmed = "not judged: " + d.effect + ", ranked above it, qualifies and removes " +
+                            NumberText(100 * refits[decided_by.load()].share_of_all_excess, "%.0f") +
+                            " % of the excess error over all channels; the next round tests it "
+                            "against the model with " + d.effect;
+      refits[k].ok = false;
+      Say(o, "  refit " + s.effect + ": " + s.why_not_confirmed);
+      continue;
+    }
     if (refits[k].ok) {
       const std::string why = WhyNotConfirmed(s, level, o);
       s.confirmed = why.empty();
@@ -266,9 +295,10 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     char line[512];
     std::snprintf(line, sizeof(line),
                   "  refit %-18s %5.1f s  Wald p = %-10.3g share of excess removed %.3f (held out "
-                  "%s) %s%s",
+                  "%s; all channels %.3f) %s%s",
                   s.effect.c_str(), refits[k].seconds, s.wald_p_value, s.share_of_excess,
-                  held_out.c_str(), s.confirmed ? "qualifies" : "rejected: ",
+                  held_out.c_str(), refits[k].share_of_all_excess,
+                  s.confirmed ? "qualifies" : "rejected: ",
                   s.why_not_confirmed.c_str());
     Say(o, line);
     if (s.refit_starts.size() > 1) {
@@ -314,6 +344,10 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
   }
   if (max_refits < 1) {
     *why = "max_refits must be >= 1";
+    return false;
+  }
+  if (!(decisive_share_of_all_excess > 0)) {
+    *why = "decisive_share_of_all_excess must be > 0";
     return false;
   }
   if (!dictionary.IsValid(why)) return false;
@@ -664,6 +698,7 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
             {"min_share_of_excess", options.min_share_of_excess},
             {"min_channels_excess", options.min_channels_excess},
             {"max_refits", options.max_refits},
+            {"decisive_share_of_all_excess", options.decisive_share_of_all_excess},
             {"whiteness_test", "Ljung-Box, chi-square p-value by the regularized incomplete gamma"},
             {"ljung_box_lags", options.residuals.lags},
             {"unexplained_rms_ratio", options.unexplained_rms_ratio},

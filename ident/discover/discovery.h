@@ -58,6 +58,13 @@ struct DiscoveryOptions {
   // the bounds). Largest predicted drop first, side by side on at most
   // fit.num_threads threads (more refits than cores only slow each down).
   int max_refits = 3;
+  // A refit that qualifies and removes at least this share of the excess
+  // error over all channels decides its round: a candidate ranked below it
+  // (shortlist order) could be chosen over it only by removing more, out of
+  // the little it leaves. Their refits stop there (reported not judged), and
+  // the next round tests them against the model with it. Infinity: every
+  // shortlisted refit runs to its end.
+  double decisive_share_of_all_excess = 0.9;
   // With a flight log, start the declared fit from a short EKF pass at the
   // final segment length (ident/ekf/ekf_start.h) instead of the config's
   // values and the coarse-to-fine schedule.

@@ -1,6 +1,7 @@
 // The output-error fit's progress lines (one per Ceres iteration, on stderr
 // through OutputErrorOptions::progress): cost, step, elapsed time, rows per
-// second, and the time the stage has left at its present rate of convergence.
+// second, and the time the stage has left at its present rate of convergence;
+// it also stops the solve when its owner asks (OutputErrorOptions::stop_requested).
 #pragma once
 
 #include <chrono>
@@ -26,11 +27,12 @@ class OutputErrorProgress : public ceres::IterationCallback {
   // rows: the logs' rows, each simulated (with sensitivities) once an iteration.
   OutputErrorProgress(std::function<void(const std::string&)> print, std::string stage,
                       std::chrono::steady_clock::time_point start, long rows,
-                      double function_tolerance);
+                      double function_tolerance, std::function<bool()> stop_requested = nullptr);
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override;
 
  private:
   std::function<void(const std::string&)> print_;
+  std::function<bool()> stop_requested_;
   std::string stage_;
   std::chrono::steady_clock::time_point start_;
   long rows_;

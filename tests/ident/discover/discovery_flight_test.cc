@@ -95,7 +95,8 @@ FlightScenario TransitFlight(double seconds) {
   return f;
 }
 
-FlightRun DiscoverIn(const Effects& effects, const FlightScenario& f, uint64_t seed) {
+FlightRun DiscoverIn(const Effects& effects, const FlightScenario& f, uint64_t seed,
+                     const DiscoveryOptions& options = Options()) {
   FlightRun run;
   run.truth = Truth(effects);
   const Log estimation = SimulateFlight(run.truth, f, seed);
@@ -107,7 +108,7 @@ FlightRun DiscoverIn(const Effects& effects, const FlightScenario& f, uint64_t s
   b.rate_hz = 50;
   const Log balance = SimulateBalance(run.truth, b, seed + 1000);
   run.result = Discover(Nominal(), {MakeEstimationLog(estimation), MakeEstimationLog(balance)},
-                        {MakeEstimationLog(validation)}, Options());
+                        {MakeEstimationLog(validation)}, options);
   return run;
 }
 
@@ -192,6 +193,33 @@ INSTANTIATE_TEST_SUITE_P(
         EffectCase{"motor_lag", {{"T_m1", 0.08}, {"T_m2", 0.06}}, false, 0.7, {"w", "az", "r"},
                    72}),
     [](const testing::TestParamInfo<EffectCase>& info) { return info.param.effect; });
+
+// A qualifying refit that removes nearly all of the excess error over all
+// channels decides its round: the refits ranked below it stop
+// (decisive_share_of_all_excess). Stopping them changes nothing the loop
+// decides: the same effects and the same final estimates as with every
+// shortlisted refit run to its end.
+TEST(DiscoverFlight, ARefitThatDecidesItsRoundChangesNothingByStoppingTheRest) {
+  const Effects effects = {{"cg_offset", {{"x_g", Value(1e-3)}, {"y_g", Value(-0.7e-3)}}}};
+  const FlightScenario f = ShortFlight(10, /*low=*/false);
+  DiscoveryOptions every_refit = Options();
+  every_refit.decisive_share_of_all_excess = INFINITY;
+  const DiscoveryResult cut = DiscoverIn(effects, f, 67).result;
+  const DiscoveryResult full = DiscoverIn(effects, f, 67, every_refit).result;
+  int not_judged = 0;
+  for (const CandidateScore& s : cut.candidates) {
+    if (s.why_not_confirmed.rfind("not judged", 0) != 0) continue;
+    ++not_judged;
+    EXPECT_FALSE(s.refitted) << s.effect;
+  }
+  ASSERT_GT(not_judged, 0) << "no refit decided its round: this case tests nothing";
+  EXPECT_EQ(cut.added, full.added);
+  const ParameterSet& a = cut.final.result.parameters;
+  const ParameterSet& b = full.final.result.parameters;
+  for (const std::string& name : b.FreeNames()) {
+    EXPECT_NEAR(a.Value(name), b.Value(name), 1e-9 * std::fabs(b.Value(name))) << name;
+  }
+}
 
 TEST(DiscoverFlight, RotorDragIsTakenByTheBodyDragNotByAWrongEffect) {
   // Near hover the body drag of eq. 24, X = rho/2 S_c Cx V_ux V_tot, is
