@@ -198,7 +198,8 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
                                 : std::string("-")) +
                            ")"
                      : "-")
-      << " | " << (s.confirmed ? "qualifies" : s.why_not_confirmed.empty() ? "-" : s.why_not_confirmed)
+      << " | "
+      << (s.confirmed ? "qualifies" : s.why_not_confirmed.empty() ? "-" : s.why_not_confirmed)
       << " | "
       << (s.testable ? s.reason : s.why_not_testable) << " |\n";
   }

@@ -270,15 +270,17 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   for (std::thread& t : threads) t.join();
   for (int k = 0; k < n; ++k) {
     CandidateScore& s = (*scores)[shortlist[k]];
-    if (k > decided_by.load()) {
-      const CandidateScore& d = (*scores)[shortlist[decided_by.load()]];
+    const int decider = decided_by.load();
+    if (k > decider) {
+      const std::string& effect = (*scores)[shortlist[decider]].effect;
       s.refitted = false;
       s.refit_starts.clear();
       s.confirmed = false;
-      s.why_not_confirmed = "not judged: " + d.effect + ", ranked above it, qualifies and removes " +
-                            NumberText(100 * refits[decided_by.load()].share_of_all_excess, "%.0f") +
-                            " % of the excess error over all channels; the next round tests it "
-                            "against the model with " + d.effect;
+      s.why_not_confirmed =
+          "not judged: " + effect + ", ranked above it, qualifies and removes " +
+          NumberText(100 * refits[decider].share_of_all_excess, "%.0f") +
+          " % of the excess error over all channels; the next round tests it against the model "
+          "with " + effect;
       refits[k].ok = false;
       Say(o, "  refit " + s.effect + ": " + s.why_not_confirmed);
       continue;
