@@ -153,7 +153,9 @@ std::string Script(const Figure& figure, const std::string& data_name,
       ++block;  // every series has a block in the data file, even an empty one
     }
     if (plot.empty()) {
-      s += "unset border\nunset tics\nset label 1 'no data' at graph 0.5,0.5 center\n";
+      // Linear axes: [0:1] on a log axis is an error that loses the whole figure.
+      s += "unset logscale\nunset border\nunset tics\nset label 1 'no data' at graph 0.5,0.5 "
+           "center\n";
       plot = "plot [0:1][0:1] -1 notitle";
     }
     s += plot + "\n";

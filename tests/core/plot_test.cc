@@ -43,6 +43,7 @@ class PlotTest : public ::testing::Test {
     a.series.push_back(s);
     PlotPanel empty;  // no data at all: a "no data" panel, not a gnuplot error
     empty.title = "empty";
+    empty.log_y = true;  // even on a log axis (a balance channel's residual periodogram)
     empty.series.push_back({"nothing", {}, {}, "lines"});
     f.panels = {a, empty};
     return f;
