@@ -218,10 +218,9 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     OutputErrorResult refit;
     OutputErrorOptions fit_k = fit;
     fit_k.stop_requested = [&decided_by, k] { return decided_by.load() < k; };
-    if (!RefitCandidate(pass, estimation, fit_k, declared_at_bounds, &s, &refit,
-                        &refits[k].next)) {
-      return;
-    }
+    const bool usable = RefitCandidate(pass, estimation, fit_k, declared_at_bounds, &s, &refit,
+                                       &refits[k].next);
+    if (!usable || fit_k.stop_requested()) return;  // stopped: set aside below, unjudged
     Vehicle v = refits[k].next.fitted;
     refits[k].snapshot = Snapshot(v, refit, estimation, {}, o);
     const ExcessShare est = ShareOfExcessRemoved(now.fit, refits[k].snapshot.fit,
@@ -249,7 +248,8 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     }
     refits[k].ok = true;
     if (all.share >= o.decisive_share_of_all_excess && WhyNotConfirmed(s, level, o).empty()) {
-      for (int d = decided_by.load(); k < d && !decided_by.compare_exchange_weak(d, k);) {
+      int d = decided_by.load();
+      while (k < d && !decided_by.compare_exchange_weak(d, k)) {  // the lowest k decides
       }
     }
   };
