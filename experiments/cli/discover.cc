@@ -161,8 +161,9 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
       << ": it was standing in for " << e.made_redundant_by << ".\n";
   }
   if (!r.symptoms.empty()) {
-    o << "\nDeclared parameters the declared fit left at a bound (a symptom of a missing effect):\n\n";
-    for (const BoundSymptom& b : r.symptoms) o << "- " << b.text << "\n";
+    o << "\nDeclared parameters the declared fit left at a bound or far outside their physical "
+         "range (a symptom of a missing effect):\n\n";
+    for (const ParameterSymptom& b : r.symptoms) o << "- " << b.text << "\n";
   }
   if (!r.unexplained.empty()) {
     o << "\nChannels whose residual is still structured and that no library effect explains:\n\n";

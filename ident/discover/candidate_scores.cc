@@ -366,10 +366,37 @@ bool ReachesAny(const std::vector<std::string>& channels, const std::vector<std:
   });
 }
 
-std::map<std::string, double> ConfigValuesOfParametersAtBounds(const ParameterSet& fit,
-                                                               const Vehicle& declared) {
+std::vector<PlausibilityFinding> FarOutsidePhysicalRange(const ParameterSet& fit,
+                                                         const ParameterSet& declared) {
+  std::map<std::string, double> estimates;
+  for (int i : fit.FreeIndices()) {
+    if (declared.Has(fit[i].name)) estimates[fit[i].name] = fit[i].value;
+  }
+  std::vector<PlausibilityFinding> out;
+  for (const PlausibilityFinding& f :
+       JudgePlausibility(declared, estimates, nullptr, nullptr).findings) {
+    if (f.kind != PlausibilityFinding::Kind::kOutsidePhysicalRange || !estimates.count(f.subject)) {
+      continue;
+    }
+    const bool far_above = f.upper > 0 && f.value > kFarOutsidePhysicalRange * f.upper;
+    const bool far_below = f.lower > 0 && f.value < f.lower / kFarOutsidePhysicalRange;
+    if (far_above || far_below) out.push_back(f);
+  }
+  return out;
+}
+
+std::vector<std::string> SymptomaticParameters(const ParameterSet& fit, const ParameterSet& declared) {
+  std::vector<std::string> out = ParametersAtBounds(fit);
+  for (const PlausibilityFinding& f : FarOutsidePhysicalRange(fit, declared)) {
+    if (std::find(out.begin(), out.end(), f.subject) == out.end()) out.push_back(f.subject);
+  }
+  return out;
+}
+
+std::map<std::string, double> ConfigValuesOfSymptomaticParameters(const ParameterSet& fit,
+                                                                  const Vehicle& declared) {
   std::map<std::string, double> out;
-  for (const std::string& name : ParametersAtBounds(fit)) {
+  for (const std::string& name : SymptomaticParameters(fit, declared.parameters)) {
     if (!declared.parameters.Has(name)) continue;  // an added effect's parameter
     const Parameter& p = fit.Get(name);
     const double config = declared.parameters.Value(name);
@@ -394,7 +421,7 @@ void MarkRestartsAtBounds(const Vehicle& fitted, const Vehicle& declared,
                           const std::vector<EstimationLog>& logs, const NoiseWeights& noise,
                           std::vector<CandidateScore>* scores) {
   const std::map<std::string, double> configs =
-      ConfigValuesOfParametersAtBounds(fitted.parameters, declared);
+      ConfigValuesOfSymptomaticParameters(fitted.parameters, declared);
   for (const auto& [name, channels] : distorted) {
     const auto at = configs.find(name);
     if (at == configs.end()) continue;

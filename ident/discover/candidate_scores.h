@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "core/plausibility.h"
 #include "dynamics/vehicle.h"
 #include "ident/discover/linearised_fit.h"
 #include "ident/estimation_log.h"
@@ -125,13 +126,32 @@ struct CandidateScore {
 // Whether any of `channels` is in `of`.
 bool ReachesAny(const std::vector<std::string>& channels, const std::vector<std::string>& of);
 
-// The declared parameters `fit` left at a bound whose config value (in
-// `declared`) lies inside the bounds, with that value: where a restart
-// starts them.
-std::map<std::string, double> ConfigValuesOfParametersAtBounds(const ParameterSet& fit,
-                                                               const Vehicle& declared);
+// A declared parameter this many times beyond a limit of its physical range
+// (core/plausibility.h) is far outside it (effects.md step 7). Measured: an
+// undeclared stabilizer bar with the balance log, Ixx fitted at 4.4 x the
+// most a body of the vehicle's mass and size can have; the bar's refit
+// restarted from the config's Ixx removed 100 % of its channels' excess,
+// from the fit's 2 %. A drag coefficient a little under the bluff-body 0.05
+// (an undeclared rotor drag in fast transits) is no symptom.
+inline constexpr double kFarOutsidePhysicalRange = 2.0;
 
-// Which declared parameters the current fit (`fitted`) left at a bound each
+// The physical-range findings (core/plausibility.h) of the declared
+// parameters `fit` estimates whose value lies kFarOutsidePhysicalRange times
+// beyond a limit of the range (single parameters only: the inertias'
+// triangle inequality names no one parameter to restart).
+std::vector<PlausibilityFinding> FarOutsidePhysicalRange(const ParameterSet& fit,
+                                                         const ParameterSet& declared);
+
+// Effects.md step 7: the declared parameters `fit` left at a bound or far
+// outside their physical range, each once.
+std::vector<std::string> SymptomaticParameters(const ParameterSet& fit, const ParameterSet& declared);
+
+// The symptomatic parameters of `fit` whose config value (in `declared`)
+// lies inside the bounds, with that value: where a restart starts them.
+std::map<std::string, double> ConfigValuesOfSymptomaticParameters(const ParameterSet& fit,
+                                                                  const Vehicle& declared);
+
+// Which symptomatic parameters of the current fit (`fitted`) each
 // candidate's refit restarts at its value in `declared` (the config)
 // (CandidateScore::restart_values): those distorting (`distorted`, channels
 // per parameter) a channel the candidate reaches. A candidate that reaches

@@ -160,12 +160,13 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
   Vehicle restarted = model;
   restarted.parameters = fit.parameters;
   std::string names;
-  for (const auto& [name, config] : ConfigValuesOfParametersAtBounds(fit.parameters, declared)) {
+  for (const auto& [name, config] : ConfigValuesOfSymptomaticParameters(fit.parameters, declared)) {
     restarted.parameters.SetValue(name, config);
     names += (names.empty() ? "" : ", ") + name;
   }
   if (names.empty()) return fit;
-  Say(options, "discover: the fit left " + names + " at a bound: refitting from their config values");
+  Say(options, "discover: the fit left " + names +
+                   " at a bound or far outside the physical range: refitting from their config values");
   OutputErrorResult refit = WarmRefit(restarted, logs, fit_options, model, fit, true);
   if (!refit.usable) return fit;
   int n = 0;
@@ -488,13 +489,21 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   Vehicle current = declared;
   current.parameters = fit.parameters;
   out.baseline = Snapshot(current, fit, estimation, validation, options);
-  for (const std::string& name : ParametersAtBounds(fit.parameters)) {
-    BoundSymptom b;
+  const std::vector<PlausibilityFinding> far =
+      FarOutsidePhysicalRange(fit.parameters, declared.parameters);
+  for (const std::string& name : SymptomaticParameters(fit.parameters, declared.parameters)) {
+    ParameterSymptom b;
     const Parameter& p = fit.parameters.Get(name);
     b.parameter = name;
     b.value = p.value;
     b.lower = p.lower;
     b.upper = p.upper;
+    for (const PlausibilityFinding& f : far) {
+      if (f.subject != name) continue;
+      b.physical_lower = f.lower;
+      b.physical_upper = f.upper;
+      b.why_outside = f.text;
+    }
     b.channels = ChannelsReachedBy(current, {name}, estimation, fit.noise);
     out.symptoms.push_back(b);
   }
@@ -522,7 +531,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     if (static_cast<int>(out.added.size()) < options.max_added) {
       std::vector<std::string> symptom_channels;
       std::map<std::string, std::vector<std::string>> distorted;
-      for (const std::string& name : ParametersAtBounds(pass.fit.parameters)) {
+      for (const std::string& name : SymptomaticParameters(pass.fit.parameters, declared.parameters)) {
         distorted[name] = ChannelsReachedBy(pass.fitted, {name}, estimation, pass.fit.noise);
         for (const std::string& c : distorted[name]) symptom_channels.push_back(c);
       }
@@ -544,7 +553,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
       }
       std::vector<CandidateRefit> refits = RefitInParallel(
           pass, estimation, validation, now, shortlist,
-          ConfigValuesOfParametersAtBounds(pass.fit.parameters, declared), &scores, o, start);
+          ConfigValuesOfSymptomaticParameters(pass.fit.parameters, declared), &scores, o, start);
       int best = -1;
       for (size_t k = 0; k < refits.size(); ++k) {
         const CandidateScore& s = scores[shortlist[k]];
@@ -586,17 +595,25 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   }
   current = pass.fitted;
   out.final = std::move(now);
-  const std::vector<std::string> still = ParametersAtBounds(out.final.result.parameters);
-  for (BoundSymptom& b : out.symptoms) {
+  const std::vector<std::string> still =
+      SymptomaticParameters(out.final.result.parameters, declared.parameters);
+  for (ParameterSymptom& b : out.symptoms) {
     b.released = std::find(still.begin(), still.end(), b.parameter) == still.end();
     std::string channels;
     for (const std::string& c : b.channels) channels += (channels.empty() ? "" : ", ") + c;
-    b.text = "the declared fit left " + b.parameter + " at " + NumberText(b.value, "%.4g") +
-             (b.value <= b.lower + 1e-6 * (b.upper - b.lower) ? ", its lower bound" : ", its upper bound") +
+    const double tolerance = 1e-6 * (b.upper - b.lower);  // as ParametersAtBounds
+    const bool at_bound = b.value <= b.lower + tolerance || b.value >= b.upper - tolerance;
+    const std::string where =
+        at_bound ? NumberText(b.value, "%.4g") +
+                       (b.value <= b.lower + tolerance ? ", its lower bound" : ", its upper bound")
+                 : "a value far outside its physical range: " + b.why_outside;
+    b.text = "the declared fit left " + b.parameter + " at " + where +
              ": a symptom of a missing effect; it distorts " + (channels.empty() ? "no channel" : channels) +
              (out.added.empty() ? std::string()
-                                : b.released ? "; the final model moved it back inside its bounds"
-                                             : "; it stays at the bound in the final model");
+              : b.released      ? (at_bound ? "; the final model moved it back inside its bounds"
+                                            : "; the final model moved it back towards its physical range")
+                                : (at_bound ? "; it stays at the bound in the final model"
+                                            : "; it stays far outside its range in the final model"));
     Say(options, "discover: " + b.text);
   }
 
@@ -654,10 +671,15 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
     }
   }
   nlohmann::json symptoms = nlohmann::json::array();
-  for (const BoundSymptom& b : r.symptoms) {
+  for (const ParameterSymptom& b : r.symptoms) {
+    auto limit = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
     symptoms.push_back({{"parameter", b.parameter},
                         {"value", b.value},
                         {"bounds", {b.lower, b.upper}},
+                        {"physical_range", b.why_outside.empty()
+                                               ? nlohmann::json()
+                                               : nlohmann::json::array({limit(b.physical_lower),
+                                                                        limit(b.physical_upper)})},
                         {"channels", b.channels},
                         {"released_in_final_model", b.released},
                         {"text", b.text}});

@@ -108,13 +108,18 @@ struct UnexplainedChannel {
   DictionarySearch generic;
 };
 
-// Effects.md step 7: a declared parameter the declared fit left at a bound
-// is itself a symptom of a missing effect.
-struct BoundSymptom {
+// Effects.md step 7: a declared parameter the declared fit left at a bound,
+// or far outside its physical range (kFarOutsidePhysicalRange), is itself a
+// symptom of a missing effect.
+struct ParameterSymptom {
   std::string parameter;
-  double value = 0, lower = 0, upper = 0;
+  double value = 0, lower = 0, upper = 0;  // lower, upper: the config's bounds
+  // Far outside its physical range: that range (one side may be +-inf) and
+  // why it holds; why_outside is empty otherwise.
+  double physical_lower = 0, physical_upper = 0;
+  std::string why_outside;
   std::vector<std::string> channels;  // the channels it distorts
-  bool released = false;              // inside its bounds in the final model
+  bool released = false;              // no longer a symptom in the final model
   std::string text;                   // for people
 };
 
@@ -133,7 +138,7 @@ struct RemovedEffect {
 
 struct DiscoveryResult {
   ModelSnapshot baseline, final;
-  std::vector<BoundSymptom> symptoms;
+  std::vector<ParameterSymptom> symptoms;
   std::string start;  // how the declared fit was started
   std::vector<CandidateScore> candidates;  // every round's scores, round by round
   std::vector<std::string> added;
