@@ -26,8 +26,7 @@ std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
     return scores[k].predicted_share <= 1 ? scores[k].predicted_share : -1.0;
   };
   auto by_share = [&](int a, int b) { return ranking_share(a) > ranking_share(b); };
-  auto by_evidence = [&](int a, int b) { return scores[a].p_value < scores[b].p_value; };
-  std::stable_sort(symptomatic.begin(), symptomatic.end(), by_evidence);
+  std::stable_sort(symptomatic.begin(), symptomatic.end(), by_share);
   std::stable_sort(promising.begin(), promising.end(), by_share);
   const size_t at_most = static_cast<size_t>(std::max(0, max_refits));
   auto take = [&](const std::vector<int>& group, size_t n, std::vector<int>* out) {

@@ -22,18 +22,12 @@ namespace coaxid {
 // refit; an undeclared CG offset with d and Iyy at bounds, never shortlisted
 // while three passing candidates filled the slots); then, up to max_refits in
 // all, the testable ones predicted to remove at least half of
-// min_share_of_excess, largest predicted share first; a share above 1 (the
-// linearised step would fit the channels below their noise) says the
-// linearisation failed, not how promising the candidate is, and ranks last.
-// The candidates acting on distorted channels rank by their score test's
-// p-value, smallest first: at a bound the linearised step's size is no guide
-// either way. Measured: seed 8000 of discover_controllers.yaml (an
-// undeclared ground effect with the balance log, Cz at 0), binary a766d57:
-// wake_interference "predicted" 406 % and took the slot ground_effect, at
-// 0.6 %, needed; seed 9607 of discover_confusion.yaml (the same truth,
-// flight only, Cz at 5), binary 96745f1: ground_effect, whose p = 0.011 was
-// the round's smallest, "predicted" 447 % and ranked behind wind, accel_bias
-// and motor_lag (0.01-19 %), which took the three slots; nothing was added.
+// min_share_of_excess. Largest predicted share first within each group; a
+// share above 1 (the linearised step would fit the channels below their
+// noise) says the linearisation failed, not how promising the candidate is,
+// and ranks last in its group (measured, seed 8000 of discover_controllers.yaml: an
+// undeclared ground effect, Cz at 0; wake_interference "predicted" 406 %
+// and took the slot ground_effect, at 0.6 %, needed).
 std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
                            const std::vector<std::string>& symptom_channels,
                            const std::vector<std::string>& excluded, int max_refits,

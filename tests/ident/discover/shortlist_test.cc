@@ -1,8 +1,8 @@
 // Which candidates a round refits (ident/discover/shortlist.h): passing
 // ones first, then those a parameter at its bound may hide (blind ones
-// before those acting on the distorted channels, ranked by their score
-// test's p-value), then promising ones ranked by the linearised share, where
-// a share above 1 (a failed linearisation) ranks last; each group capped.
+// before those acting on the distorted channels), then promising ones, each
+// group capped and ranked by the linearised share, where a share above 1
+// (a failed linearisation) ranks last.
 #include "ident/discover/shortlist.h"
 
 #include <string>
@@ -32,34 +32,25 @@ std::vector<std::string> Names(const std::vector<CandidateScore>& scores,
   return out;
 }
 
-// Seed 9607 of discover_confusion.yaml (an undeclared ground effect, flight
-// only, Cz at its upper bound, distorting az and w), its round-1 scores
-// (binary 96745f1): ground_effect has the round's smallest p-value and a
-// failed linearisation (share 447 %); ranked by share it came last of the
-// candidates acting on az, w and was never refitted.
-TEST(Shortlist, CandidatesAtABoundRankByTheirScoreTestsEvidence) {
-  std::vector<CandidateScore> scores = {
-      Score("ground_effect", 4.47, false, {"az", "w"}),
-      Score("wind", 0.191, false, {"u", "v", "az", "w"}),
-      Score("rotor_drag", 5.2e-4, false, {"u", "v"}),
-      Score("motor_lag", 1.0e-4, false, {"az", "w", "p"}),
-      Score("accel_bias", 5.5e-4, false, {"ax", "ay", "az"})};
-  const double p[] = {0.0105, 0.0155, 0.0403, 0.145, 0.638};
-  for (size_t k = 0; k < scores.size(); ++k) scores[k].p_value = p[k];
-  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {}, 3, 0.3)),
-            (std::vector<std::string>{"ground_effect", "wind", "motor_lag"}));
-}
-
-// Without a parameter at a bound, the promising candidates rank by their
-// predicted share, and a share above 1 (a failed linearisation) ranks last.
-TEST(Shortlist, APromisingShareAboveOneRanksLast) {
+// Seed 8000 of discover_controllers.yaml (an undeclared ground effect, Cz at
+// its lower bound, distorting az and w), its round-1 shares: wind blind,
+// wake_interference at 406 %, accel_bias 1.7 %, ground_effect 0.63 %. The
+// 406 % must not take the last slot from ground_effect.
+TEST(Shortlist, AShareAboveOneRanksLastAmongTheCandidatesAtABound) {
   const std::vector<CandidateScore> scores = {
-      Score("wake_interference", 4.06), Score("accel_bias", 0.17), Score("ground_effect", 0.63),
-      Score("motor_lag", 0.02)};
-  EXPECT_EQ(Names(scores, Shortlist(scores, {}, {}, 2, 0.3)),
-            (std::vector<std::string>{"ground_effect", "accel_bias"}));
-  EXPECT_EQ(Names(scores, Shortlist(scores, {}, {}, 10, 0.3)),
-            (std::vector<std::string>{"ground_effect", "accel_bias", "wake_interference"}));
+      Score("cg_offset", 4e-5, false, {"p", "q"}),
+      Score("wake_interference", 4.06, false, {"ax", "az", "w", "p"}),
+      Score("accel_bias", 0.017, false, {"ax", "ay", "az"}),
+      Score("wind", 1.7e-4, false, {"u", "v", "az", "w"}, /*blind=*/true),
+      Score("ground_effect", 0.0063, false, {"az", "w"}),
+      Score("motor_lag", 1.9e-5, false, {"az", "w", "p"})};
+  const std::vector<int> picked = Shortlist(scores, {"az", "w"}, {}, 3, 0.3);
+  EXPECT_EQ(Names(scores, picked),
+            (std::vector<std::string>{"wind", "accel_bias", "ground_effect"}));
+  // With room for all, the 406 % comes after every informative share.
+  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {}, 10, 0.3)),
+            (std::vector<std::string>{"wind", "accel_bias", "ground_effect", "motor_lag",
+                                      "wake_interference"}));
 }
 
 TEST(Shortlist, PassingFirstThenAtBoundsThenPromisingEachCapped) {
