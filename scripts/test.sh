@@ -31,9 +31,8 @@ if [ "${1:-}" = "--sanitize" ]; then
   # Output-error fits of a 44 s CoaX flight (7-25 s here).
   SANITIZE_SKIP+='|^CoaxCliTest\.OutputError|^DiscoverStabilizerBar\.FoundAlone'
   # The whole loop through the CLI on a randomised draw's flight and balance
-  # logs (9 s in Release with two threads, a whole loop like the flights skipped
-  # above); its new code
-  # (SymptomaticParameters) runs here in its unit test.
+  # logs (9 s in Release with two threads, like the flights skipped above);
+  # its new code (SymptomaticParameters) runs here in its unit test.
   SANITIZE_SKIP+='|^DiscoverSymptomCli\.'
   ctest --output-on-failure -j"$(nproc)" -E "$SANITIZE_SKIP"
   exit 0
