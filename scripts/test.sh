@@ -31,7 +31,7 @@ if [ "${1:-}" = "--sanitize" ]; then
   # Output-error fits of a 44 s CoaX flight (7-25 s here).
   SANITIZE_SKIP+='|^CoaxCliTest\.OutputError|^DiscoverStabilizerBar\.FoundAlone'
   # The whole loop through the CLI on a randomised draw's flight and balance
-  # logs (9 s in Release with two threads, like the flights skipped above);
+  # logs (9 s in Release, 211 s here; it passed under the sanitizers once);
   # its new code (SymptomaticParameters) runs here in its unit test.
   SANITIZE_SKIP+='|^DiscoverSymptomCli\.'
   ctest --output-on-failure -j"$(nproc)" -E "$SANITIZE_SKIP"
