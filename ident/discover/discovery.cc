@@ -491,6 +491,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   out.baseline = Snapshot(current, fit, estimation, validation, options);
   const std::vector<PlausibilityFinding> far =
       FarOutsidePhysicalRange(fit.parameters, declared.parameters);
+  const std::vector<std::string> at_bounds = ParametersAtBounds(fit.parameters);
   for (const std::string& name : SymptomaticParameters(fit.parameters, declared.parameters)) {
     ParameterSymptom b;
     const Parameter& p = fit.parameters.Get(name);
@@ -498,6 +499,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     b.value = p.value;
     b.lower = p.lower;
     b.upper = p.upper;
+    b.at_bound = std::find(at_bounds.begin(), at_bounds.end(), name) != at_bounds.end();
     for (const PlausibilityFinding& f : far) {
       if (f.subject != name) continue;
       b.physical_lower = f.lower;
@@ -601,11 +603,10 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     b.released = std::find(still.begin(), still.end(), b.parameter) == still.end();
     std::string channels;
     for (const std::string& c : b.channels) channels += (channels.empty() ? "" : ", ") + c;
-    const double tolerance = 1e-6 * (b.upper - b.lower);  // as ParametersAtBounds
-    const bool at_bound = b.value <= b.lower + tolerance || b.value >= b.upper - tolerance;
+    const bool at_bound = b.at_bound;
     const std::string where =
         at_bound ? NumberText(b.value, "%.4g") +
-                       (b.value <= b.lower + tolerance ? ", its lower bound" : ", its upper bound")
+                       (b.value - b.lower < b.upper - b.value ? ", its lower bound" : ", its upper bound")
                  : "a value far outside its physical range: " + b.why_outside;
     b.text = "the declared fit left " + b.parameter + " at " + where +
              ": a symptom of a missing effect; it distorts " + (channels.empty() ? "no channel" : channels) +

@@ -114,6 +114,7 @@ struct UnexplainedChannel {
 struct ParameterSymptom {
   std::string parameter;
   double value = 0, lower = 0, upper = 0;  // lower, upper: the config's bounds
+  bool at_bound = false;                   // ParametersAtBounds names it
   // Far outside its physical range: that range (one side may be +-inf) and
   // why it holds; why_outside is empty otherwise.
   double physical_lower = 0, physical_upper = 0;
