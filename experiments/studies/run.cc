@@ -165,8 +165,24 @@ nlohmann::json DiscoverRun(const StudySpec& spec, const Vehicle& start, const Ve
   for (const ChannelResidualTest& t : r.baseline.residual_tests) {
     if (t.noise_std > 0) declared_rms_ratio = std::max(declared_rms_ratio, t.rms / t.noise_std);
   }
+  // Every refit's gates and shares: the study judges the practical-significance
+  // threshold on them (ShareThresholdSummary).
+  nlohmann::json refits = nlohmann::json::array();
+  for (const CandidateScore& c : r.candidates) {
+    if (!c.refitted) continue;
+    refits.push_back({{"round", c.round},
+                      {"effect", c.effect},
+                      {"significant", c.significant},
+                      {"confirmed", c.confirmed},
+                      {"share", c.share_of_excess},
+                      {"share_held_out", std::isfinite(c.share_of_excess_held_out)
+                                             ? nlohmann::json(c.share_of_excess_held_out)
+                                             : nlohmann::json(nullptr)},
+                      {"excess_removed_all_channels", c.excess_removed_all_channels}});
+  }
   return {{"ok", true},
           {"added", r.added},
+          {"refits", refits},
           {"unexplained", unexplained},
           {"declared_rms_over_noise", declared_rms_ratio},
           {"seconds", r.seconds},

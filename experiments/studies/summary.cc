@@ -10,6 +10,7 @@
 #include "core/statistics.h"
 #include "experiments/simulation/simulate_experiment.h"
 #include "experiments/studies/confusion.h"
+#include "experiments/studies/share_threshold.h"
 #include "experiments/studies/points.h"
 
 namespace coaxid {
@@ -203,7 +204,10 @@ nlohmann::json SummarizeStudy(const StudySpec& spec, const std::vector<nlohmann:
   if (!spec.sweep.parameter.empty()) summary["parameter"] = spec.sweep.parameter;
   const bool discover = std::find(spec.methods.begin(), spec.methods.end(),
                                   StudyMethod::kDiscover) != spec.methods.end();
-  if (spec.randomise.enabled && discover) summary["confusion"] = ConfusionSummary(records);
+  if (spec.randomise.enabled && discover) {
+    summary["confusion"] = ConfusionSummary(records);
+    summary["share_threshold"] = ShareThresholdSummary(records);
+  }
   return summary;
 }
 
@@ -263,6 +267,7 @@ std::string StudySummaryMarkdown(const nlohmann::json& s) {
     }
   }
   if (s.contains("confusion")) md += ConfusionMarkdown(s["confusion"]);
+  if (s.contains("share_threshold")) md += ShareThresholdMarkdown(s["share_threshold"]);
   return md;
 }
 

@@ -192,6 +192,7 @@ nlohmann::json CandidateScore::ToJson() const {
                   {"excess_removed_per_channel", excess_removed},
                   {"channels_excess", channels_excess},
                   {"excess_removed_all_channels", excess_removed_all_channels},
+                  {"significant", significant},
                   {"confirmed", confirmed}};
     if (!plausible) j["refit"]["why_implausible"] = why_implausible;
     if (!confirmed) j["refit"]["why_not_confirmed"] = why_not_confirmed;

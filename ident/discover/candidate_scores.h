@@ -117,6 +117,10 @@ struct CandidateScore {
   // noise^2: how the qualifying refits are ranked (two candidates that
   // remove all of their own channels' excess differ in what else they fix).
   double excess_removed_all_channels = 0;
+  // The refit passes every gate before practical significance: Wald,
+  // physical meaning, an excess in its channels (how a study judges the
+  // share threshold: experiments/studies/confusion.h).
+  bool significant = false;
   // The loop's decision on the refit (every criterion of discovery.h).
   bool confirmed = false;
   std::string why_not_confirmed;

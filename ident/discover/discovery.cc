@@ -47,12 +47,9 @@ ModelSnapshot Snapshot(const Vehicle& vehicle, const OutputErrorResult& r,
   return s;
 }
 
-// Why a refitted candidate is not added (empty: it is), at the Wald level
-// `level`. Without a held-out share (NaN) the last gate reads the estimation
-// share alone; the held-out share only ever adds a condition to that gate.
-std::string WhyNotConfirmed(const CandidateScore& s, double level, const DiscoveryOptions& o) {
-  const double share_held_out =
-      std::isfinite(s.share_of_excess_held_out) ? s.share_of_excess_held_out : s.share_of_excess;
+// Why a refitted candidate fails a gate before practical significance (empty:
+// none): the Wald test at `level`, physical meaning, an excess to remove.
+std::string WhyNotSignificant(const CandidateScore& s, double level, const DiscoveryOptions& o) {
   if (!(s.wald_p_value < level)) {
     return "its parameters are not significantly away from absence at the refit (cluster-robust "
            "Wald p = " + NumberText(s.wald_p_value, "%.3g") + ", level " +
@@ -64,6 +61,17 @@ std::string WhyNotConfirmed(const CandidateScore& s, double level, const Discove
            NumberText(s.channels_excess, "%.3g") + " noise variances, below " +
            NumberText(o.min_channels_excess, "%.3g") + ")";
   }
+  return "";
+}
+
+// Why a refitted candidate is not added (empty: it is), at the Wald level
+// `level`. Without a held-out share (NaN) the last gate reads the estimation
+// share alone; the held-out share only ever adds a condition to that gate.
+std::string WhyNotConfirmed(const CandidateScore& s, double level, const DiscoveryOptions& o) {
+  const std::string why = WhyNotSignificant(s, level, o);
+  if (!why.empty()) return why;
+  const double share_held_out =
+      std::isfinite(s.share_of_excess_held_out) ? s.share_of_excess_held_out : s.share_of_excess;
   if (!(s.share_of_excess >= o.min_share_of_excess && share_held_out >= o.min_share_of_excess)) {
     return "practically insignificant: it removes " +
            ShareText(s.share_of_excess, s.share_of_excess_held_out) + ", below " +
@@ -287,6 +295,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
       continue;
     }
     if (refits[k].ok) {
+      s.significant = WhyNotSignificant(s, level, o).empty();
       const std::string why = WhyNotConfirmed(s, level, o);
       s.confirmed = why.empty();
       s.why_not_confirmed = why;

@@ -103,6 +103,21 @@ TEST(Discover, FindsCgOffset) {
   }
   ExpectWithinThreeStd(r, truth, "cg_offset.x_g");
   ExpectWithinThreeStd(r, truth, "cg_offset.y_g");
+  // What a study's threshold replay reads (experiments/studies/
+  // share_threshold.h): a confirmed refit is significant, and a significant
+  // one that is not confirmed failed the share alone.
+  int significant = 0;
+  for (const CandidateScore& c : r.candidates) {
+    if (!c.refitted) continue;
+    significant += c.significant;
+    if (c.confirmed) EXPECT_TRUE(c.significant) << c.effect;
+    if (c.significant && !c.confirmed) {
+      EXPECT_EQ(c.why_not_confirmed.rfind("practically insignificant", 0), 0u)
+          << c.effect << ": " << c.why_not_confirmed;
+    }
+    if (!c.significant) EXPECT_FALSE(c.confirmed) << c.effect;
+  }
+  EXPECT_GE(significant, 1);
 }
 
 TEST(Discover, TwoEffectsAreBothFound) {
