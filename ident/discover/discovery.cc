@@ -12,6 +12,7 @@
 #include "core/report_values.h"
 #include "core/stopwatch.h"
 #include "ident/discover/practical_significance.h"
+#include "ident/discover/round_choice.h"
 #include "ident/discover/shortlist.h"
 #include "ident/ekf/ekf_start.h"
 
@@ -565,13 +566,25 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
       std::vector<CandidateRefit> refits = RefitInParallel(
           pass, estimation, validation, now, shortlist,
           ConfigValuesOfSymptomaticParameters(pass.fit.parameters, declared), &scores, o, start);
-      int best = -1;
+      std::vector<RefitOfRound> judged;
       for (size_t k = 0; k < refits.size(); ++k) {
-        const CandidateScore& s = scores[shortlist[k]];
-        if (s.confirmed && (best < 0 || s.excess_removed_all_channels >
-                                            scores[shortlist[best]].excess_removed_all_channels)) {
-          best = static_cast<int>(k);
-        }
+        judged.push_back({&scores[shortlist[k]], refits[k].ok, refits[k].share_of_all_excess});
+      }
+      const RoundChoice choice =
+          ChooseOfRound(judged, options.alpha / std::max<size_t>(1, shortlist.size()),
+                        options.min_channels_excess, options.decisive_share_of_all_excess);
+      const int best = choice.added;
+      if (choice.vetoed >= 0) {
+        CandidateScore& s = scores[shortlist[choice.vetoed]];
+        const CandidateScore& d = scores[shortlist[choice.dominant]];
+        s.confirmed = false;
+        s.why_not_confirmed =
+            "it removes " + NumberText(100 * refits[choice.vetoed].share_of_all_excess, "%.0f") +
+            " % of the excess error over all channels, " + d.effect + " " +
+            NumberText(100 * refits[choice.dominant].share_of_all_excess, "%.0f") +
+            " % with a parameter at its bound (" + d.why_implausible +
+            "): the missing physics is neither alone";
+        Say(options, "discover: " + s.effect + " is not added: " + s.why_not_confirmed);
       }
       if (best >= 0) {
         const CandidateScore& s = scores[shortlist[best]];

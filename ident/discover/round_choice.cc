@@ -1,0 +1,35 @@
+#include "ident/discover/round_choice.h"
+
+namespace coaxid {
+
+RoundChoice ChooseOfRound(const std::vector<RefitOfRound>& refits, double wald_level,
+                          double min_channels_excess, double decisive_share) {
+  RoundChoice c;
+  for (size_t k = 0; k < refits.size(); ++k) {
+    const RefitOfRound& r = refits[k];
+    if (!r.judged) continue;
+    const CandidateScore& s = *r.score;
+    const int i = static_cast<int>(k);
+    if (s.confirmed && (c.added < 0 || s.excess_removed_all_channels >
+                                           refits[c.added].score->excess_removed_all_channels)) {
+      c.added = i;
+    }
+    const bool dominant_at_bound = !s.plausible && s.wald_p_value < wald_level &&
+                                   s.channels_excess >= min_channels_excess &&
+                                   r.share_of_all_excess >= decisive_share;
+    if (dominant_at_bound &&
+        (c.dominant < 0 || r.share_of_all_excess > refits[c.dominant].share_of_all_excess)) {
+      c.dominant = i;
+    }
+  }
+  if (c.added >= 0 && c.dominant >= 0 &&
+      refits[c.added].share_of_all_excess < refits[c.dominant].share_of_all_excess) {
+    c.vetoed = c.added;
+    c.added = -1;
+  } else {
+    c.dominant = -1;
+  }
+  return c;
+}
+
+}  // namespace coaxid

@@ -1,0 +1,71 @@
+#include "ident/discover/round_choice.h"
+
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace coaxid {
+namespace {
+
+CandidateScore Refitted(bool confirmed, bool plausible, double wald_p, double removed_all) {
+  CandidateScore s;
+  s.refitted = true;
+  s.confirmed = confirmed;
+  s.plausible = plausible;
+  s.wald_p_value = wald_p;
+  s.channels_excess = 5;
+  s.excess_removed_all_channels = removed_all;
+  return s;
+}
+
+constexpr double kLevel = 0.01 / 3, kMinExcess = 0.1, kDecisive = 0.9;
+
+// Seed 8901 of the controllers' study, as measured: wind qualifies (27 % of
+// the excess over all channels), stabilizer_bar removes 98 % with T_b at its
+// bound, swashplate_bias 32 % but practically insignificant in its channels.
+TEST(ChooseOfRound, ALesserCandidateIsNotAddedBesideARefitAtABoundThatRemovesAlmostAll) {
+  const CandidateScore bias = Refitted(false, true, 7.6e-59, 30.4);
+  const CandidateScore wind = Refitted(true, true, 6.3e-5, 26.1);
+  const CandidateScore bar = Refitted(false, false, 5.9e-200, 92.8);
+  const RoundChoice c =
+      ChooseOfRound({{&bias, true, 0.32}, {&wind, true, 0.27}, {&bar, true, 0.98}}, kLevel,
+                    kMinExcess, kDecisive);
+  EXPECT_EQ(c.added, -1);
+  EXPECT_EQ(c.vetoed, 1);
+  EXPECT_EQ(c.dominant, 2);
+}
+
+TEST(ChooseOfRound, TheQualifyingRefitThatRemovesTheMostOverAllChannelsIsAdded) {
+  const CandidateScore a = Refitted(true, true, 1e-9, 10);
+  const CandidateScore b = Refitted(true, true, 1e-9, 40);
+  const CandidateScore unjudged = Refitted(true, true, 1e-9, 90);  // stopped: not judged
+  const RoundChoice c = ChooseOfRound({{&a, true, 0.1}, {&b, true, 0.4}, {&unjudged, false, 0.9}},
+                                      kLevel, kMinExcess, kDecisive);
+  EXPECT_EQ(c.added, 1);
+  EXPECT_EQ(c.vetoed, -1);
+  EXPECT_EQ(c.dominant, -1);
+}
+
+// A refit at a bound vetoes only when it is significant, removes at least the
+// decisive share over all channels, and more than the best qualifying one.
+TEST(ChooseOfRound, ARefitAtABoundVetoesOnlyWhenDecisiveSignificantAndLarger) {
+  const CandidateScore wind = Refitted(true, true, 1e-6, 30);
+  const CandidateScore weak = Refitted(false, false, 1e-6, 80);        // 0.85 < decisive
+  const CandidateScore chance = Refitted(false, false, 0.2, 95);       // Wald p above the level
+  const CandidateScore smaller = Refitted(false, false, 1e-6, 95);     // 0.92, but wind 0.95
+  const CandidateScore gyro = Refitted(true, true, 1e-6, 99);
+  EXPECT_EQ(ChooseOfRound({{&wind, true, 0.3}, {&weak, true, 0.85}}, kLevel, kMinExcess, kDecisive)
+                .added, 0);
+  EXPECT_EQ(ChooseOfRound({{&wind, true, 0.3}, {&chance, true, 0.95}}, kLevel, kMinExcess,
+                          kDecisive).added, 0);
+  EXPECT_EQ(ChooseOfRound({{&gyro, true, 0.95}, {&smaller, true, 0.92}}, kLevel, kMinExcess,
+                          kDecisive).added, 0);
+  // Nothing qualifies: nothing added, nothing vetoed.
+  const RoundChoice none = ChooseOfRound({{&smaller, true, 0.92}}, kLevel, kMinExcess, kDecisive);
+  EXPECT_EQ(none.added, -1);
+  EXPECT_EQ(none.vetoed, -1);
+  EXPECT_EQ(none.dominant, -1);
+}
+
+}  // namespace
+}  // namespace coaxid
