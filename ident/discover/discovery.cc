@@ -48,6 +48,11 @@ ModelSnapshot Snapshot(const Vehicle& vehicle, const OutputErrorResult& r,
   return s;
 }
 
+// The Wald level of a round's refits: alpha over the number refitted.
+double WaldLevel(const DiscoveryOptions& o, size_t refitted) {
+  return o.alpha / static_cast<double>(std::max<size_t>(1, refitted));
+}
+
 // Why a refitted candidate fails a gate before practical significance (empty:
 // none): the Wald test at `level`, physical meaning, an excess to remove.
 std::string WhyNotSignificant(const CandidateScore& s, double level, const DiscoveryOptions& o) {
@@ -217,7 +222,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   fit.progress = nullptr;
   const int workers = std::max(1, std::min(n, o.fit.num_threads));
   fit.num_threads = std::max(1, o.fit.num_threads / workers);
-  const double level = o.alpha / n;
+  const double level = WaldLevel(o, shortlist.size());
   // The first (in shortlist order) refit that qualifies and removes at least
   // decisive_share_of_all_excess of the excess over all channels; the refits
   // ranked below it stop, whichever finished first, so the outcome does not
@@ -571,7 +576,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         judged.push_back({&scores[shortlist[k]], refits[k].ok, refits[k].share_of_all_excess});
       }
       const RoundChoice choice =
-          ChooseOfRound(judged, options.alpha / std::max<size_t>(1, shortlist.size()),
+          ChooseOfRound(judged, WaldLevel(options, shortlist.size()),
                         options.min_channels_excess, options.decisive_share_of_all_excess);
       const int best = choice.added;
       if (choice.vetoed >= 0) {
