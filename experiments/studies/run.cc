@@ -171,6 +171,7 @@ nlohmann::json DiscoverRun(const StudySpec& spec, const Vehicle& start, const Ve
   for (const CandidateScore& c : r.candidates) {
     if (!c.refitted) continue;
     refits.push_back({{"round", c.round},
+                      {"beside", c.beside.empty() ? nlohmann::json() : nlohmann::json(c.beside)},
                       {"effect", c.effect},
                       {"significant", c.significant},
                       {"confirmed", c.confirmed},

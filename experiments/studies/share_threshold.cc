@@ -32,7 +32,9 @@ nlohmann::json ShareThresholdSummary(const std::vector<nlohmann::json>& records)
     const std::set<std::string> truth = TruthEffectsOfDraw(r["draw"]);
     std::vector<Refit> refits;
     for (const nlohmann::json& c : m["refits"]) {
-      if (c["round"].get<int>() != 1) continue;
+      // A paired refit's (beside a provisional effect) is judged against
+      // another model than the round's.
+      if (c["round"].get<int>() != 1 || c.value("beside", nlohmann::json()).is_string()) continue;
       Refit f;
       f.in_truth = truth.count(c["effect"].get<std::string>()) > 0;
       f.significant = c["significant"].get<bool>();

@@ -163,6 +163,8 @@ nlohmann::json CandidateScore::ToJson() const {
       {"num_free_parameters", num_free_parameters}};
   if (!testable) j["why_not_testable"] = why_not_testable;
   j["blind_at_bounds"] = blind_at_bounds;
+  if (!beside.empty()) j["beside"] = beside;
+  if (!added_with.empty()) j["added_with"] = added_with;
   if (!restart_values.empty()) j["restart_values"] = restart_values;
   if (!refit_starts.empty()) {
     auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
@@ -567,6 +569,8 @@ std::string StartText(const std::map<std::string, double>& restarts, bool from_s
                        : "absence, " + names + " at the config values";
 }
 
+}  // namespace
+
 bool OwnParameterAtBound(const std::string& effect, const ParameterSet& parameters) {
   const std::vector<std::string> names = EffectParameterNames(effect);
   for (const std::string& name : ParametersAtBounds(parameters)) {
@@ -575,7 +579,31 @@ bool OwnParameterAtBound(const std::string& effect, const ParameterSet& paramete
   return false;
 }
 
-}  // namespace
+ColumnTest EffectWaldTest(const CandidatePass& at_refit, const std::string& effect,
+                          std::string* why_not) {
+  const LinearisedFit& lin = at_refit.linearised;
+  const std::vector<std::string> names = EffectParameterNames(effect);
+  std::vector<std::string> excluded = AllParameterNames(at_refit.candidates);
+  excluded.insert(excluded.end(), names.begin(), names.end());
+  const ColumnTester tester(lin, ParametersExcept(lin, excluded));
+  // Scaled distance from absence (every effect's absent value is 0).
+  std::vector<std::string> tested;
+  for (const std::string& name : names) {
+    if (lin.ParameterIndex(name) >= 0) tested.push_back(name);
+  }
+  if (tested.empty()) {
+    *why_not = "every parameter of it sits at a bound";
+    return ColumnTest();
+  }
+  Eigen::VectorXd values(tested.size());
+  for (size_t k = 0; k < tested.size(); ++k) {
+    values[k] = at_refit.fitted.parameters.Value(tested[k]) /
+                lin.parameter_scales[lin.ParameterIndex(tested[k])];
+  }
+  ColumnTest t = tester.Test(ParameterIndices(lin, tested), &values);
+  if (!t.ok) *why_not = t.why_not;
+  return t;
+}
 
 bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
                     const OutputErrorOptions& fit_options,
@@ -704,27 +732,10 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
   if (Reweighted(candidate, logs, fit_options, refit)) take(*refit);
   candidate.parameters = refit->parameters;
   CandidatePass at_refit = LinearisePass(candidate, *refit, logs, fit_options);
-  const LinearisedFit& lin = at_refit.linearised;
-  std::vector<std::string> excluded = AllParameterNames(at_refit.candidates);
-  excluded.insert(excluded.end(), names.begin(), names.end());
-  const ColumnTester tester(lin, ParametersExcept(lin, excluded));
-  // Scaled distance from absence (every effect's absent value is 0). A
-  // parameter held at its bound has no column: test the others.
-  std::vector<std::string> tested;
-  for (const std::string& name : names) {
-    if (lin.ParameterIndex(name) >= 0) tested.push_back(name);
-  }
-  if (tested.empty()) {
-    score->why_not_confirmed = "at the refit every parameter of it sits at a bound";
-    return false;
-  }
-  Eigen::VectorXd values(tested.size());
-  for (size_t k = 0; k < tested.size(); ++k) {
-    values[k] = refit->parameters.Value(tested[k]) / lin.parameter_scales[lin.ParameterIndex(tested[k])];
-  }
-  const ColumnTest t = tester.Test(ParameterIndices(lin, tested), &values);
+  std::string why_not_tested;
+  const ColumnTest t = EffectWaldTest(at_refit, score->effect, &why_not_tested);
   if (!t.ok) {
-    score->why_not_confirmed = "at the refit: " + t.why_not;
+    score->why_not_confirmed = "at the refit: " + why_not_tested;
     return false;
   }
   score->wald_statistic = t.statistic;

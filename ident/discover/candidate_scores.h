@@ -124,6 +124,11 @@ struct CandidateScore {
   // The loop's decision on the refit (every criterion of discovery.h).
   bool confirmed = false;
   std::string why_not_confirmed;
+  // A paired refit (paired_refit.h): scored and refitted with this effect
+  // provisionally in the model (empty: against the current model) ...
+  std::string beside;
+  // ... and, of the candidate at its bound, the effect it was added with.
+  std::string added_with;
   nlohmann::json ToJson() const;
 };
 
@@ -222,6 +227,18 @@ std::vector<std::string> ChannelsReachedBy(const Vehicle& vehicle,
 OutputErrorResult WarmRefit(const Vehicle& vehicle, const std::vector<EstimationLog>& logs,
                             const OutputErrorOptions& fit_options, const Vehicle& current,
                             const OutputErrorResult& current_fit, bool coarse_to_fine = false);
+
+// Whether a parameter of `effect` sits at a bound in `parameters`.
+bool OwnParameterAtBound(const std::string& effect, const ParameterSet& parameters);
+
+// The cluster-robust Wald test of `effect`'s parameters at a refit, from the
+// pass linearised there (`at_refit`: its model holds the effect, with the
+// refit's values): their scaled distance from absence, every other
+// parameter and segment state estimated (the pass's candidates aside). A
+// parameter held at its bound has no column and is left out. Not ok, with
+// *why_not, when nothing is left to test or the test fails.
+ColumnTest EffectWaldTest(const CandidatePass& at_refit, const std::string& effect,
+                          std::string* why_not);
 
 // Refits `score.effect` jointly into the pass's model (starting at its
 // linearised estimates, or at absence with score.restart_values restarted;

@@ -1,90 +1,21 @@
 #include "ident/discover/discovery.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <thread>
 
 #include "core/errors.h"
 #include "core/report.h"
 #include "core/report_values.h"
 #include "core/stopwatch.h"
+#include "ident/discover/paired_refit.h"
 #include "ident/discover/practical_significance.h"
-#include "ident/discover/round_choice.h"
-#include "ident/discover/shortlist.h"
+#include "ident/discover/round_refits.h"
 #include "ident/ekf/ekf_start.h"
 
 namespace coaxid {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-void Say(const DiscoveryOptions& o, const std::string& line) {
-  if (o.progress) o.progress(line);
-}
-
-// The held-out side of a snapshot (nothing without held-out logs).
-void AddValidation(const std::vector<EstimationLog>& validation, const DiscoveryOptions& o,
-                   ModelSnapshot* s) {
-  if (validation.empty()) return;
-  s->validation_predictions =
-      PredictWithFixedParameters(s->vehicle, validation, s->result.noise, o.window_s, o.fit);
-  s->validation = ChannelFitErrors(validation, s->validation_predictions);
-  s->validation_residual_tests = AnalyseResiduals(validation, s->validation_predictions, o.residuals);
-}
-
-ModelSnapshot Snapshot(const Vehicle& vehicle, const OutputErrorResult& r,
-                       const std::vector<EstimationLog>& estimation,
-                       const std::vector<EstimationLog>& validation, const DiscoveryOptions& o) {
-  ModelSnapshot s;
-  s.vehicle = vehicle;
-  s.vehicle.parameters = r.parameters;
-  s.result = r;
-  s.fit = ChannelFitErrors(estimation, r.predictions);
-  s.residual_tests = AnalyseResiduals(estimation, r.predictions, o.residuals);
-  AddValidation(validation, o, &s);
-  return s;
-}
-
-// The Wald level of a round's refits: alpha over the number refitted.
-double WaldLevel(const DiscoveryOptions& o, size_t refitted) {
-  return o.alpha / static_cast<double>(std::max<size_t>(1, refitted));
-}
-
-// Why a refitted candidate fails a gate before practical significance (empty:
-// none): the Wald test at `level`, physical meaning, an excess to remove.
-std::string WhyNotSignificant(const CandidateScore& s, double level, const DiscoveryOptions& o) {
-  if (!(s.wald_p_value < level)) {
-    return "its parameters are not significantly away from absence at the refit (cluster-robust "
-           "Wald p = " + NumberText(s.wald_p_value, "%.3g") + ", level " +
-           NumberText(level, "%.3g") + ")";
-  }
-  if (!s.plausible) return "not physically meaningful: " + s.why_implausible;
-  if (!(s.channels_excess >= o.min_channels_excess)) {
-    return "its channels hold almost no excess error to remove (" +
-           NumberText(s.channels_excess, "%.3g") + " noise variances, below " +
-           NumberText(o.min_channels_excess, "%.3g") + ")";
-  }
-  return "";
-}
-
-// Why a refitted candidate is not added (empty: it is), at the Wald level
-// `level`. Without a held-out share (NaN) the last gate reads the estimation
-// share alone; the held-out share only ever adds a condition to that gate.
-std::string WhyNotConfirmed(const CandidateScore& s, double level, const DiscoveryOptions& o) {
-  const std::string why = WhyNotSignificant(s, level, o);
-  if (!why.empty()) return why;
-  const double share_held_out =
-      std::isfinite(s.share_of_excess_held_out) ? s.share_of_excess_held_out : s.share_of_excess;
-  if (!(s.share_of_excess >= o.min_share_of_excess && share_held_out >= o.min_share_of_excess)) {
-    return "practically insignificant: it removes " +
-           ShareText(s.share_of_excess, s.share_of_excess_held_out) + ", below " +
-           NumberText(100 * o.min_share_of_excess, "%.0f") + " %";
-  }
-  return "";
-}
 
 nlohmann::json TestsJson(const std::vector<ChannelResidualTest>& tests) {
   nlohmann::json j = nlohmann::json::object();
@@ -111,16 +42,6 @@ nlohmann::json SnapshotJson(const ModelSnapshot& s, bool has_validation) {
   }
   return j;
 }
-
-// What a candidate's refit gives the loop: the model with it and the pass
-// at the refit (the next round's, if it is added).
-struct CandidateRefit {
-  bool ok = false;
-  double seconds = 0;
-  double share_of_all_excess = 0;  // of the excess error over all channels, estimation data
-  ModelSnapshot snapshot;
-  CandidatePass next;
-};
 
 // Continues a fit that stopped at the loop's iteration cap, at most three
 // more solves at the final segment length and the same noise weights, each
@@ -197,142 +118,6 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
   return Converged(model, std::move(refit), logs, fit_options, options);
 }
 
-// Refits the shortlisted candidates side by side and judges each: Wald p
-// below alpha over the number refitted (Bonferroni), no parameter at a bound,
-// and at least min_share_of_excess of its channels' excess error removed on
-// the estimation data and on the held-out data.
-std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
-                                            const std::vector<EstimationLog>& estimation,
-                                            const std::vector<EstimationLog>& validation,
-                                            const ModelSnapshot& now, const std::vector<int>& shortlist,
-                                            const std::map<std::string, double>& declared_at_bounds,
-                                            std::vector<CandidateScore>* scores,
-                                            const DiscoveryOptions& o, Clock::time_point start) {
-  const int n = static_cast<int>(shortlist.size());
-  std::vector<CandidateRefit> refits(n);
-  if (n == 0) return refits;
-  std::string names;
-  for (int k : shortlist) names += (names.empty() ? "" : ", ") + (*scores)[k].effect;
-  Say(o, "discover: refitting " + names + " jointly (" +
-             NumberText(SecondsSince(start), "%.1f s") + " so far)");
-  // Each worker's fits and held-out predictions: its share of the threads,
-  // silent (side by side: the loop reports each result).
-  DiscoveryOptions worker_options = o;
-  OutputErrorOptions& fit = worker_options.fit;
-  fit.progress = nullptr;
-  const int workers = std::max(1, std::min(n, o.fit.num_threads));
-  fit.num_threads = std::max(1, o.fit.num_threads / workers);
-  const double level = WaldLevel(o, shortlist.size());
-  // The first (in shortlist order) refit that qualifies and removes at least
-  // decisive_share_of_all_excess of the excess over all channels; the refits
-  // ranked below it stop, whichever finished first, so the outcome does not
-  // depend on the timing.
-  std::atomic<int> decided_by{n};
-  auto evaluate = [&](int k) {
-    CandidateScore& s = (*scores)[shortlist[k]];
-    OutputErrorResult refit;
-    OutputErrorOptions fit_k = fit;
-    fit_k.stop_requested = [&decided_by, k] { return decided_by.load() < k; };
-    const bool usable = RefitCandidate(pass, estimation, fit_k, declared_at_bounds, &s, &refit,
-                                       &refits[k].next);
-    if (!usable || fit_k.stop_requested()) return;  // stopped: set aside below, unjudged
-    Vehicle v = refits[k].next.fitted;
-    refits[k].snapshot = Snapshot(v, refit, estimation, {}, o);
-    const ExcessShare est = ShareOfExcessRemoved(now.fit, refits[k].snapshot.fit,
-                                                 now.residual_tests, s.channels);
-    s.share_of_excess = est.share;
-    s.excess_removed = est.per_channel;
-    s.channels_excess = est.excess;
-    std::vector<std::string> all_channels;
-    for (const ChannelResidualTest& t : now.residual_tests) all_channels.push_back(t.channel);
-    const ExcessShare all = ShareOfExcessRemoved(now.fit, refits[k].snapshot.fit,
-                                                 now.residual_tests, all_channels);
-    s.excess_removed_all_channels = all.share * all.excess;
-    refits[k].share_of_all_excess = all.share;
-    // The held-out prediction (start states fitted per window) is the
-    // costliest step after the refit (measured, a 30 s held-out flight under
-    // a model missing three effects: 13 s in one of two workers, its cap of
-    // 50 iterations), and it decides only a candidate that passes every gate
-    // on the estimation data.
-    if (!validation.empty() && WhyNotConfirmed(s, level, o).empty()) {
-      AddValidation(validation, worker_options, &refits[k].snapshot);
-      s.share_of_excess_held_out =
-          ShareOfExcessRemoved(now.validation, refits[k].snapshot.validation,
-                               now.validation_residual_tests, s.channels)
-              .share;
-    }
-    refits[k].ok = true;
-    if (all.share >= o.decisive_share_of_all_excess && WhyNotConfirmed(s, level, o).empty()) {
-      int d = decided_by.load();
-      while (k < d && !decided_by.compare_exchange_weak(d, k)) {  // the lowest k decides
-      }
-    }
-  };
-  auto one = [&](int k) {
-    const auto t0 = Clock::now();
-    evaluate(k);
-    refits[k].seconds = SecondsSince(t0);
-  };
-  std::atomic<int> next{0};
-  auto worker = [&] {
-    for (int k = next++; k < n; k = next++) {
-      if (k <= decided_by.load()) one(k);
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int w = 1; w < workers; ++w) threads.emplace_back(worker);
-  worker();
-  for (std::thread& t : threads) t.join();
-  for (int k = 0; k < n; ++k) {
-    CandidateScore& s = (*scores)[shortlist[k]];
-    const int decider = decided_by.load();
-    if (k > decider) {
-      const std::string& effect = (*scores)[shortlist[decider]].effect;
-      s.refitted = false;
-      s.refit_starts.clear();
-      s.confirmed = false;
-      s.why_not_confirmed =
-          "not judged: " + effect + ", ranked above it, qualifies and removes " +
-          NumberText(100 * refits[decider].share_of_all_excess, "%.0f") +
-          " % of the excess error over all channels; the next round tests it against the model "
-          "with " + effect;
-      refits[k].ok = false;
-      Say(o, "  refit " + s.effect + ": " + s.why_not_confirmed);
-      continue;
-    }
-    if (refits[k].ok) {
-      s.significant = WhyNotSignificant(s, level, o).empty();
-      const std::string why = WhyNotConfirmed(s, level, o);
-      s.confirmed = why.empty();
-      s.why_not_confirmed = why;
-    }
-    // No held-out share: no held-out logs, or rejected on the estimation data.
-    const std::string held_out = std::isfinite(s.share_of_excess_held_out)
-                                     ? NumberText(s.share_of_excess_held_out, "%.3f")
-                                     : std::string("-");
-    char line[512];
-    std::snprintf(line, sizeof(line),
-                  "  refit %-18s %5.1f s  Wald p = %-10.3g share of excess removed %.3f (held out "
-                  "%s; all channels %.3f) %s%s",
-                  s.effect.c_str(), refits[k].seconds, s.wald_p_value, s.share_of_excess,
-                  held_out.c_str(), refits[k].share_of_all_excess,
-                  s.confirmed ? "qualifies" : "rejected: ",
-                  s.why_not_confirmed.c_str());
-    Say(o, line);
-    if (s.refit_starts.size() > 1) {
-      std::string starts;
-      for (const RefitStart& r : s.refit_starts) {
-        starts += (starts.empty() ? "" : "; ") + r.from + ": cost " +
-                  NumberText(r.cost, "%.6g") + " in " + NumberText(r.seconds, "%.1f s") +
-                  (r.kept ? " (kept)" : "");
-      }
-      Say(o, "    " + std::to_string(s.refit_starts.size()) + " starts (the current fit's cost " +
-                 NumberText(pass.fit.final_cost, "%.6g") + "; the lowest is kept): " + starts);
-    }
-  }
-  return refits;
-}
-
 }  // namespace
 
 bool DiscoveryOptions::IsValid(std::string* why) const {
@@ -406,7 +191,7 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
   for (size_t i = 0; i < out->added.size(); ++i) {
     const std::string& effect = out->added[i];
     const bool itself = i + 1 == out->added.size();
-    const auto t0 = Clock::now();
+    const auto t0 = DiscoveryClock::now();
     const Vehicle without = WithoutEffect(pass->fitted, effect);
     const OutputErrorResult fit = WarmRefit(without, estimation, o.fit, pass->fitted, pass->fit);
     if (!fit.usable) continue;  // keep it: nothing to judge against
@@ -457,7 +242,7 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
 DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLog>& estimation,
                          const std::vector<EstimationLog>& validation,
                          const DiscoveryOptions& options) {
-  const auto start = Clock::now();
+  const auto start = DiscoveryClock::now();
   std::string why;
   if (!options.IsValid(&why)) throw InputError("discover options: " + why);
   if (estimation.empty()) throw InputError("discover: no estimation log");
@@ -534,70 +319,19 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                      (out.added.empty() ? std::string("the declared model")
                                         : "the model with " + std::to_string(out.added.size()) +
                                               " added effect(s)"));
-    std::vector<CandidateScore> scores = ScoreCandidates(
-        pass, estimation, options.alpha, round, WeightedExcess(now.residual_tests, pass.fit.noise));
-    for (const CandidateScore& s : scores) {
-      char line[256];
-      std::snprintf(line, sizeof(line),
-                    "  %-18s F = %-10.4g p = %-10.3g p_holm = %-10.3g predicted share %-8.3g %s",
-                    s.effect.c_str(), s.statistic, s.p_value, s.p_corrected, s.predicted_share,
-                    !s.testable ? "not testable" : s.passes ? "passes" : "fails");
-      Say(options, line);
-    }
+    std::vector<CandidateScore> scores = ScoreRound(pass, now, estimation, o, round);
+    std::vector<CandidateScore> beside;  // a paired refit's, reported after the round's
     bool accepted = false;
     if (static_cast<int>(out.added.size()) < options.max_added) {
-      std::vector<std::string> symptom_channels;
-      std::map<std::string, std::vector<std::string>> distorted;
-      for (const std::string& name : SymptomaticParameters(pass.fit.parameters, declared.parameters)) {
-        distorted[name] = ChannelsReachedBy(pass.fitted, {name}, estimation, pass.fit.noise);
-        for (const std::string& c : distorted[name]) symptom_channels.push_back(c);
-      }
-      MarkRestartsAtBounds(pass.fitted, declared, distorted, estimation, pass.fit.noise, &scores);
       std::vector<std::string> removed;  // a removed effect does not come back (no cycling)
       for (const RemovedEffect& r : out.removed) removed.push_back(r.effect);
-      const std::vector<int> shortlist = Shortlist(scores, symptom_channels, removed,
-                                                    options.max_refits, options.min_share_of_excess);
-      for (int k : shortlist) {
-        const CandidateScore& s = scores[k];
-        if (s.restart_values.empty()) continue;
-        std::string names;
-        for (const auto& [name, value] : s.restart_values) names += (names.empty() ? "" : ", ") + name;
-        Say(options, "  " + s.effect +
-                         (s.blind_at_bounds ? " reaches the channels " + names +
-                                                  " distort only off their bounds"
-                                            : " acts on channels that " + names + " distort") +
-                         ": its refit restarts them at the config values");
-      }
-      std::vector<CandidateRefit> refits = RefitInParallel(
-          pass, estimation, validation, now, shortlist,
-          ConfigValuesOfSymptomaticParameters(pass.fit.parameters, declared), &scores, o, start);
-      std::vector<RefitOfRound> judged;
-      for (size_t k = 0; k < refits.size(); ++k) {
-        judged.push_back({&scores[shortlist[k]], refits[k].ok, refits[k].share_of_all_excess});
-      }
-      const RoundChoice choice =
-          ChooseOfRound(judged, WaldLevel(options, shortlist.size()),
-                        options.min_channels_excess, options.decisive_share_of_all_excess);
-      const int best = choice.added;
-      if (choice.vetoed >= 0) {
-        CandidateScore& s = scores[shortlist[choice.vetoed]];
-        const CandidateScore& d = scores[shortlist[choice.dominant]];
-        s.confirmed = false;
-        s.why_not_confirmed =
-            "it removes " + NumberText(100 * refits[choice.vetoed].share_of_all_excess, "%.0f") +
-            " % of the excess error over all channels, " + d.effect + " " +
-            NumberText(100 * refits[choice.dominant].share_of_all_excess, "%.0f") +
-            " % with a parameter at its bound (" + d.why_implausible +
-            "): the missing physics is neither alone";
-        Say(options, "discover: " + s.effect + " is not added: " + s.why_not_confirmed);
-      }
-      if (best >= 0) {
-        const CandidateScore& s = scores[shortlist[best]];
-        Say(options, "discover: added " + s.effect + " (Wald p = " +
-                         NumberText(s.wald_p_value, "%.3g") + ", removes " +
-                         NumberText(100 * s.share_of_excess, "%.0f") + " % of its channels' excess error)");
-        pass = std::move(refits[best].next);
-        now = std::move(refits[best].snapshot);
+      RoundRefits refits = RefitShortlisted(pass, now, declared, removed, estimation, validation,
+                                            &scores, o, start);
+      // The model with a refit: continued if it stopped at its cap, and
+      // restarted off the bounds it leaves.
+      auto adopt = [&](CandidateRefit&& refit) {
+        pass = std::move(refit.next);
+        now = std::move(refit.snapshot);
         if (pass.fit.hit_iteration_limit) {
           const OutputErrorResult fit = Converged(pass.fitted, pass.fit, estimation, o.fit, options);
           Vehicle v = pass.fitted;
@@ -614,12 +348,31 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
           pass = LinearisePass(v, restarted, estimation, o.fit);
           now = Snapshot(v, restarted, estimation, validation, options);
         }
+      };
+      const int best = refits.choice.added;
+      if (best >= 0) {
+        const CandidateScore& s = scores[refits.shortlist[best]];
+        Say(options, "discover: added " + s.effect + " (Wald p = " +
+                         NumberText(s.wald_p_value, "%.3g") + ", removes " +
+                         NumberText(100 * s.share_of_excess, "%.0f") + " % of its channels' excess error)");
+        adopt(std::move(refits.refits[best]));
         out.added.push_back(s.effect);
         accepted = true;
-        DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out);
+      } else if (static_cast<int>(out.added.size()) + 2 <= options.max_added) {
+        PairedRefit pair = RefitBesideABound(now, refits, &scores, declared, removed, estimation,
+                                             validation, o, round, start);
+        beside = std::move(pair.beside);
+        if (pair.added) {
+          adopt(std::move(pair.joint));
+          out.added.push_back(pair.first);
+          out.added.push_back(pair.second);
+          accepted = true;
+        }
       }
+      if (accepted) DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out);
     }
     out.candidates.insert(out.candidates.end(), scores.begin(), scores.end());
+    out.candidates.insert(out.candidates.end(), beside.begin(), beside.end());
     if (!accepted) break;
   }
   current = pass.fitted;
@@ -746,7 +499,11 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
              "at a bound and it removes at least min_share_of_excess of its channels' excess "
              "error (an excess of at least min_channels_excess) on the estimation and the "
              "held-out data; the qualifying refit that removes the most excess error over all "
-             "channels is added"},
+             "channels is added; a round that adds nothing but holds a significant, material refit "
+             "with a parameter of its own at a bound is refitted with that candidate in the "
+             "model, and the best candidate qualifying there is added with it if, at their "
+             "joint refit, it is inside its bounds and significant and the pair removes at "
+             "least min_share_of_excess of their channels' excess error"},
             {"min_share_of_excess", options.min_share_of_excess},
             {"min_channels_excess", options.min_channels_excess},
             {"max_refits", options.max_refits},

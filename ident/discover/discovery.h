@@ -10,7 +10,9 @@
 // estimation and on the held-out data, out of an excess of at least
 // min_channels_excess) and, of those, removes the most excess error over all
 // channels, unless a refit at a bound removes more, decisively
-// (round_choice.h); repeat until none qualifies. A channel whose residual stays structured (Ljung-Box p
+// (round_choice.h); a round that adds nothing but holds a significant refit
+// at its own bound looks for the effect beside it (paired_refit.h); repeat
+// until none qualifies. A channel whose residual stays structured (Ljung-Box p
 // below alpha, or a mean offset beyond its noise; and rms clearly above its
 // sample-to-sample noise) with no
 // candidate left to explain it is reported as unexplained, with what it

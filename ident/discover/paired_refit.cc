@@ -1,0 +1,122 @@
+#include "ident/discover/paired_refit.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/report_values.h"
+#include "ident/discover/practical_significance.h"
+
+namespace coaxid {
+namespace {
+
+// The refit of the round at its own bound that is significant and material
+// on its channels (estimation data), the one removing the most excess error
+// over all channels; -1: none.
+int FirstAtItsBound(const RoundRefits& round, const std::vector<CandidateScore>& scores,
+                    const DiscoveryOptions& o) {
+  const double level = WaldLevel(o, round.shortlist.size());
+  int first = -1;
+  for (size_t k = 0; k < round.refits.size(); ++k) {
+    const CandidateScore& s = scores[round.shortlist[k]];
+    if (!round.refits[k].ok || s.plausible || !(s.wald_p_value < level) ||
+        !(s.channels_excess >= o.min_channels_excess) ||
+        !(s.share_of_excess >= o.min_share_of_excess)) {
+      continue;
+    }
+    if (first < 0 || round.refits[k].share_of_all_excess > round.refits[first].share_of_all_excess) {
+      first = static_cast<int>(k);
+    }
+  }
+  return first;
+}
+
+}  // namespace
+
+PairedRefit RefitBesideABound(const ModelSnapshot& now, const RoundRefits& round,
+                              std::vector<CandidateScore>* scores, const Vehicle& declared,
+                              const std::vector<std::string>& excluded,
+                              const std::vector<EstimationLog>& estimation,
+                              const std::vector<EstimationLog>& validation,
+                              const DiscoveryOptions& o, int round_number,
+                              DiscoveryClock::time_point start) {
+  PairedRefit pair;
+  const int k = FirstAtItsBound(round, *scores, o);
+  if (k < 0) return pair;
+  CandidateScore& first = (*scores)[round.shortlist[k]];
+  const CandidateRefit& with_first = round.refits[k];
+  pair.first = first.effect;
+  Say(o, "discover: " + first.effect + "'s refit is significant and removes " +
+             NumberText(100 * first.share_of_excess, "%.0f") +
+             " % of its channels' excess error, but " + first.why_implausible +
+             ": refitting the round with it in the model, for an effect beside it");
+  ModelSnapshot at_first = with_first.snapshot;
+  AddValidation(validation, o, &at_first);
+  pair.beside = ScoreRound(with_first.next, at_first, estimation, o, round_number);
+  for (CandidateScore& s : pair.beside) s.beside = first.effect;
+  std::vector<std::string> not_beside = excluded;
+  not_beside.push_back(first.effect);
+  RoundRefits refits = RefitShortlisted(with_first.next, at_first, declared, not_beside, estimation,
+                                        validation, &pair.beside, o, start);
+  if (refits.choice.added < 0) {
+    pair.why_not = "no candidate qualifies beside it";
+    Say(o, "discover: nothing added beside " + first.effect + ": " + pair.why_not);
+    return pair;
+  }
+  CandidateScore& second = pair.beside[refits.shortlist[refits.choice.added]];
+  pair.second = second.effect;
+  pair.joint = std::move(refits.refits[refits.choice.added]);
+  const ParameterSet& joint = pair.joint.snapshot.result.parameters;
+  // The first at the joint refit: inside its bounds, and there.
+  std::string why;
+  if (OwnParameterAtBound(first.effect, joint)) {
+    why = first.effect + " stays at its bound beside " + second.effect;
+  } else {
+    std::string why_not_tested;
+    const ColumnTest t = EffectWaldTest(pair.joint.next, first.effect, &why_not_tested);
+    pair.first_wald_p_value = t.ok ? t.p_value : 1;
+    if (!t.ok) {
+      why = first.effect + " at the joint refit: " + why_not_tested;
+    } else if (!(t.p_value < WaldLevel(o, round.shortlist.size()))) {
+      why = first.effect + " is not significantly away from absence beside " + second.effect +
+            " (cluster-robust Wald p = " + NumberText(t.p_value, "%.3g") + ")";
+    }
+  }
+  // The pair against the model with neither, on both members' channels.
+  std::vector<std::string> channels = first.channels;
+  for (const std::string& c : second.channels) {
+    if (std::find(channels.begin(), channels.end(), c) == channels.end()) channels.push_back(c);
+  }
+  pair.share_of_excess =
+      ShareOfExcessRemoved(now.fit, pair.joint.snapshot.fit, now.residual_tests, channels).share;
+  if (!validation.empty() && !pair.joint.snapshot.validation.empty()) {
+    pair.share_of_excess_held_out =
+        ShareOfExcessRemoved(now.validation, pair.joint.snapshot.validation,
+                             now.validation_residual_tests, channels)
+            .share;
+  }
+  const double held_out = std::isfinite(pair.share_of_excess_held_out)
+                              ? pair.share_of_excess_held_out
+                              : pair.share_of_excess;
+  if (why.empty() &&
+      !(pair.share_of_excess >= o.min_share_of_excess && held_out >= o.min_share_of_excess)) {
+    why = "the pair removes " + ShareText(pair.share_of_excess, pair.share_of_excess_held_out) +
+          ", below " +
+          NumberText(100 * o.min_share_of_excess, "%.0f") + " %";
+  }
+  if (!why.empty()) {
+    pair.why_not = why;
+    Say(o, "discover: " + first.effect + " and " + second.effect + " are not added: " + why);
+    return pair;
+  }
+  pair.added = true;
+  first.confirmed = true;
+  first.added_with = second.effect;
+  first.why_not_confirmed.clear();
+  Say(o, "discover: added " + first.effect + " and " + second.effect + " together (" +
+             first.effect + " Wald p = " + NumberText(pair.first_wald_p_value, "%.3g") +
+             " beside it; the pair removes " +
+             ShareText(pair.share_of_excess, pair.share_of_excess_held_out) + ")");
+  return pair;
+}
+
+}  // namespace coaxid

@@ -1,0 +1,52 @@
+// Two effects the closing loop adds together (effects.md step 6; issue 13).
+//
+// A round that adds nothing may hold a refit that is significant and removes
+// a material share of its channels' excess error, but carries one of its own
+// parameters to a bound: the effect pushed past its range stands in for a
+// second one beside it (measured, controllers' study seeds 8901 and 8902: a
+// stabilizer bar beside a swashplate bias, the bar's T_b at its 10 s bound,
+// its slow tilt taking the bias's place; no other candidate qualified
+// alone). The round is then refitted with that candidate (the first) in the
+// model: every other candidate scored and the shortlisted ones refitted
+// against the model with it, on the gates of discovery.h. The one chosen
+// there (the second) is added with the first when, at their joint refit,
+// the first's parameters are inside their bounds and significantly away
+// from absence (cluster-robust Wald at the round's level), and the pair
+// removes at least min_share_of_excess of their channels' excess error
+// against the model with neither, on the estimation and the held-out data.
+// The loop judges step 5 again after (either member the other makes
+// redundant leaves). Nothing else changes: a round that adds a single
+// effect, or holds no such refit, is not refitted again.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "ident/discover/round_refits.h"
+
+namespace coaxid {
+
+struct PairedRefit {
+  bool added = false;
+  std::string first, second;           // effects; empty: none tried / none chosen
+  std::vector<CandidateScore> beside;  // the candidates scored with the first in the model
+  CandidateRefit joint;                // the second's refit with the first (added: the model)
+  double share_of_excess = 0;          // of the pair's channels, against the model with neither
+  double share_of_excess_held_out = std::numeric_limits<double>::quiet_NaN();
+  double first_wald_p_value = 1;       // the first's Wald test at the joint refit
+  std::string why_not;                 // not added, a first tried: why
+};
+
+// `round`: the refits of a round against the current model `now` that chose
+// nothing, `scores` the round's scores (the first's score is updated when
+// the pair is added). `excluded`: effects that may not come back.
+PairedRefit RefitBesideABound(const ModelSnapshot& now, const RoundRefits& round,
+                              std::vector<CandidateScore>* scores, const Vehicle& declared,
+                              const std::vector<std::string>& excluded,
+                              const std::vector<EstimationLog>& estimation,
+                              const std::vector<EstimationLog>& validation,
+                              const DiscoveryOptions& o, int round_number,
+                              DiscoveryClock::time_point start);
+
+}  // namespace coaxid

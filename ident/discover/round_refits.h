@@ -1,0 +1,79 @@
+// One round of the closing loop (effects.md steps 3-6), in the pieces the
+// loop (discovery.cc) and the paired refit (paired_refit.h) share: score
+// every candidate against the current model, refit the shortlisted ones side
+// by side, judge each refit on the gates of discovery.h, and choose what the
+// round adds (round_choice.h).
+#pragma once
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "ident/discover/candidate_scores.h"
+#include "ident/discover/discovery.h"
+#include "ident/discover/round_choice.h"
+#include "ident/estimation_log.h"
+
+namespace coaxid {
+
+using DiscoveryClock = std::chrono::steady_clock;
+
+// A progress line, if the options ask for them.
+void Say(const DiscoveryOptions& o, const std::string& line);
+
+// The held-out side of a snapshot (nothing without held-out logs).
+void AddValidation(const std::vector<EstimationLog>& validation, const DiscoveryOptions& o,
+                   ModelSnapshot* s);
+
+// A fitted model and how well it fits the estimation (and held-out) logs.
+ModelSnapshot Snapshot(const Vehicle& vehicle, const OutputErrorResult& r,
+                       const std::vector<EstimationLog>& estimation,
+                       const std::vector<EstimationLog>& validation, const DiscoveryOptions& o);
+
+// The Wald level of a round's refits: alpha over the number refitted.
+double WaldLevel(const DiscoveryOptions& o, size_t refitted);
+
+// Why a refitted candidate fails a gate before practical significance (empty:
+// none): the Wald test at `level`, physical meaning, an excess to remove.
+std::string WhyNotSignificant(const CandidateScore& s, double level, const DiscoveryOptions& o);
+
+// Why a refitted candidate is not added (empty: it is), at the Wald level
+// `level`. Without a held-out share (NaN) the last gate reads the estimation
+// share alone; the held-out share only ever adds a condition to that gate.
+std::string WhyNotConfirmed(const CandidateScore& s, double level, const DiscoveryOptions& o);
+
+// What a candidate's refit gives the loop: the model with it and the pass
+// at the refit (the next round's, if it is added).
+struct CandidateRefit {
+  bool ok = false;
+  double seconds = 0;
+  double share_of_all_excess = 0;  // of the excess error over all channels, estimation data
+  ModelSnapshot snapshot;
+  CandidatePass next;
+};
+
+// Every candidate of `pass` scored against the current model `now` (round
+// `round`), one progress line each.
+std::vector<CandidateScore> ScoreRound(const CandidatePass& pass, const ModelSnapshot& now,
+                                       const std::vector<EstimationLog>& estimation,
+                                       const DiscoveryOptions& o, int round);
+
+// A round's refits and what it adds.
+struct RoundRefits {
+  std::vector<int> shortlist;          // indices into the round's scores
+  std::vector<CandidateRefit> refits;  // one per shortlisted candidate
+  RoundChoice choice;                  // indices into shortlist / refits
+};
+
+// Shortlists the candidates of `*scores` (none of `excluded`), restarting the
+// declared parameters (config values in `declared`) that the current fit
+// left at a bound or far outside their range, refits them side by side
+// against `now` and chooses (ChooseOfRound). Fills the scores' refit fields.
+RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now,
+                             const Vehicle& declared, const std::vector<std::string>& excluded,
+                             const std::vector<EstimationLog>& estimation,
+                             const std::vector<EstimationLog>& validation,
+                             std::vector<CandidateScore>* scores, const DiscoveryOptions& o,
+                             DiscoveryClock::time_point start);
+
+}  // namespace coaxid
