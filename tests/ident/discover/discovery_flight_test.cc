@@ -258,6 +258,29 @@ TEST(DiscoverFlight, TwoEffectsAreBothFound) {
   EXPECT_EQ(added, (std::vector<std::string>{"gyroscopic", "wind"}));
 }
 
+TEST(DiscoverFlight, ABarBesideASwashplateBiasIsFoundAsAPair) {
+  // The library's typical bar and swashplate bias (paired_refit.h): alone,
+  // the bar's refit carries T_b to its bound (its slow tilt standing in for
+  // the bias) and no other refit qualifies; refitted with the bar in the
+  // model, the bias qualifies, and the bar comes back inside its bounds.
+  const FlightRun run = DiscoverInFlight(
+      {{"stabilizer_bar", {{"T_b", Value(1.8)}, {"k_b", Value(0.6)}, {"d_u", Value(0.165)}}},
+       {"swashplate_bias", {{"b_x", Value(0.015)}, {"b_y", Value(-0.01)}}}},
+      false, 73, 0.7, 10);
+  std::vector<std::string> added = run.result.added;
+  std::sort(added.begin(), added.end());
+  EXPECT_EQ(added, (std::vector<std::string>{"stabilizer_bar", "swashplate_bias"}));
+  bool paired = false;
+  for (const CandidateScore& s : run.result.candidates) {
+    paired |= s.effect == "stabilizer_bar" && s.added_with == "swashplate_bias";
+  }
+  EXPECT_TRUE(paired) << "found, but not by the paired refit this test is for";
+  for (const char* name : {"stabilizer_bar.T_b", "stabilizer_bar.k_b", "swashplate_bias.b_x",
+                           "swashplate_bias.b_y"}) {
+    ExpectWithinThreeStd(run.result, run.truth, name);
+  }
+}
+
 TEST(DiscoverFlight, NothingAddedWithoutAnUndeclaredEffect) {
   // Family-wise alpha = 0.01 per run: over 2 seeds a false alarm has
   // probability ~2 % if the test keeps its level (20 seeds measured by
