@@ -182,12 +182,16 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
        "refit: cluster-robust Wald p, no parameter at a bound, and the share of its channels' "
        "excess error (rms^2 - noise^2) removed, at least "
     << Num(100 * options.min_share_of_excess, "%.0f")
-    << " % on the estimation and the held-out data.\n\n";
+    << " % on the estimation and the held-out data. A round that adds nothing but holds a "
+       "significant refit with a parameter of its own at a bound is refitted with that effect in "
+       "the model (rows \"beside\" it); the best candidate qualifying there is added with it "
+       "when the pair qualifies.\n\n";
   o << "| round | effect | F | p | p (Holm) | predicted share | passes | refit: Wald p | share "
        "removed (held out) | decision | channels / reason |\n"
        "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const CandidateScore& s : r.candidates) {
-    o << "| " << s.round << " | " << s.effect << " | "
+    o << "| " << s.round << (s.beside.empty() ? "" : " (beside " + s.beside + ")") << " | "
+      << s.effect << " | "
       << (s.testable ? Num(s.statistic) : "-") << " | " << (s.testable ? Num(s.p_value, "%.3g") : "-")
       << " | " << (s.testable ? Num(s.p_corrected, "%.3g") : "-") << " | "
       << (s.testable ? Num(s.predicted_share, "%.3g") : "-") << " | "
@@ -200,7 +204,10 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
                            ")"
                      : "-")
       << " | "
-      << (s.confirmed ? "qualifies" : s.why_not_confirmed.empty() ? "-" : s.why_not_confirmed)
+      << (s.confirmed ? (s.added_with.empty() ? "qualifies"
+                                              : "added with " + s.added_with + " (paired refit)")
+          : s.why_not_confirmed.empty() ? "-"
+                                        : s.why_not_confirmed)
       << " | "
       << (s.testable ? s.reason : s.why_not_testable) << " |\n";
   }
