@@ -359,12 +359,12 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         out.added.push_back(s.effect);
         accepted = true;
       } else if (static_cast<int>(out.added.size()) + 2 <= options.max_added) {
-        PairedRefit pair = RefitBesideABound(now, refits, &scores, declared, removed, estimation,
-                                             validation, o, round, start);
+        PairedRefit pair = RefitBesideABound(pass, now, refits, &scores, declared, removed,
+                                             estimation, validation, o, round, start);
         beside = std::move(pair.beside);
-        if (pair.added) {
+        if (pair.added || pair.second_alone) {
           adopt(std::move(pair.joint));
-          out.added.push_back(pair.first);
+          if (pair.added) out.added.push_back(pair.first);
           out.added.push_back(pair.second);
           accepted = true;
         }

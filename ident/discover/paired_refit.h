@@ -1,4 +1,5 @@
-// Two effects the closing loop adds together (effects.md step 6; issue 13).
+// Two effects the closing loop adds together (effects.md steps 4, 5 and 7;
+// issue 13).
 //
 // A round that adds nothing may hold a refit that is significant and removes
 // a material share of its channels' excess error, but carries one of its own
@@ -15,7 +16,10 @@
 // removes at least min_share_of_excess of their channels' excess error
 // against the model with neither, on the estimation and the held-out data.
 // The loop judges step 5 again after (either member the other makes
-// redundant leaves). Nothing else changes: a round that adds a single
+// redundant leaves). When the pair is not added and the second had no refit
+// in the round (the first took its slot), the second is refitted alone
+// against the current model and judged like any candidate of the round (its
+// Wald level counting one refit more): added if it qualifies. Nothing else changes: a round that adds a single
 // effect, or holds no such refit, is not refitted again.
 #pragma once
 
@@ -28,7 +32,8 @@
 namespace coaxid {
 
 struct PairedRefit {
-  bool added = false;
+  bool added = false;                  // the pair is added
+  bool second_alone = false;           // not the pair: the second alone is (joint: its refit)
   std::string first, second;           // effects; empty: none tried / none chosen
   std::vector<CandidateScore> beside;  // the candidates scored with the first in the model
   CandidateRefit joint;                // the second's refit with the first (added: the model)
@@ -38,10 +43,11 @@ struct PairedRefit {
   std::string why_not;                 // not added, a first tried: why
 };
 
-// `round`: the refits of a round against the current model `now` that chose
-// nothing, `scores` the round's scores (the first's score is updated when
+// `round`: the refits of a round against the current model (`pass`, `now`)
+// that chose nothing, `scores` the round's scores (the first's score is updated when
 // the pair is added). `excluded`: effects that may not come back.
-PairedRefit RefitBesideABound(const ModelSnapshot& now, const RoundRefits& round,
+PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& now,
+                              const RoundRefits& round,
                               std::vector<CandidateScore>* scores, const Vehicle& declared,
                               const std::vector<std::string>& excluded,
                               const std::vector<EstimationLog>& estimation,

@@ -75,13 +75,14 @@ std::string WhyNotConfirmed(const CandidateScore& s, double level, const Discove
 namespace {
 
 // Refits the shortlisted candidates side by side and judges each: Wald p
-// below alpha over the number refitted (Bonferroni), no parameter at a bound,
+// below alpha over the `family` of refits (Bonferroni), no parameter at a bound,
 // and at least min_share_of_excess of its channels' excess error removed on
 // the estimation data and on the held-out data.
 std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
                                             const std::vector<EstimationLog>& estimation,
                                             const std::vector<EstimationLog>& validation,
                                             const ModelSnapshot& now, const std::vector<int>& shortlist,
+                                            size_t family,
                                             const std::map<std::string, double>& declared_at_bounds,
                                             std::vector<CandidateScore>* scores,
                                             const DiscoveryOptions& o, DiscoveryClock::time_point start) {
@@ -99,7 +100,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   fit.progress = nullptr;
   const int workers = std::max(1, std::min(n, o.fit.num_threads));
   fit.num_threads = std::max(1, o.fit.num_threads / workers);
-  const double level = WaldLevel(o, shortlist.size());
+  const double level = WaldLevel(o, family);
   // The first (in shortlist order) refit that qualifies and removes at least
   // decisive_share_of_all_excess of the excess over all channels; the refits
   // ranked below it stop, whichever finished first, so the outcome does not
@@ -242,9 +243,9 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
     for (const std::string& c : distorted[name]) symptom_channels.push_back(c);
   }
   MarkRestartsAtBounds(pass.fitted, declared, distorted, estimation, pass.fit.noise, scores);
-  RoundRefits r;
-  r.shortlist = Shortlist(*scores, symptom_channels, excluded, o.max_refits, o.min_share_of_excess);
-  for (int k : r.shortlist) {
+  const std::vector<int> shortlist =
+      Shortlist(*scores, symptom_channels, excluded, o.max_refits, o.min_share_of_excess);
+  for (int k : shortlist) {
     const CandidateScore& s = (*scores)[k];
     if (s.restart_values.empty()) continue;
     std::string names;
@@ -255,14 +256,26 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
                                   : " acts on channels that " + names + " distort") +
                ": its refit restarts them at the config values");
   }
-  r.refits = RefitInParallel(pass, estimation, validation, now, r.shortlist,
+  return RefitListed(pass, now, declared, shortlist, shortlist.size(), estimation, validation,
+                     scores, o, start);
+}
+
+RoundRefits RefitListed(const CandidatePass& pass, const ModelSnapshot& now, const Vehicle& declared,
+                        const std::vector<int>& listed, size_t family,
+                        const std::vector<EstimationLog>& estimation,
+                        const std::vector<EstimationLog>& validation,
+                        std::vector<CandidateScore>* scores, const DiscoveryOptions& o,
+                        DiscoveryClock::time_point start) {
+  RoundRefits r;
+  r.shortlist = listed;
+  r.refits = RefitInParallel(pass, estimation, validation, now, r.shortlist, family,
                              ConfigValuesOfSymptomaticParameters(pass.fit.parameters, declared),
                              scores, o, start);
   std::vector<RefitOfRound> judged;
   for (size_t k = 0; k < r.refits.size(); ++k) {
     judged.push_back({&(*scores)[r.shortlist[k]], r.refits[k].ok, r.refits[k].share_of_all_excess});
   }
-  r.choice = ChooseOfRound(judged, WaldLevel(o, r.shortlist.size()), o.min_channels_excess,
+  r.choice = ChooseOfRound(judged, WaldLevel(o, family), o.min_channels_excess,
                            o.decisive_share_of_all_excess);
   if (r.choice.vetoed >= 0) {
     CandidateScore& s = (*scores)[r.shortlist[r.choice.vetoed]];

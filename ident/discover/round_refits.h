@@ -76,4 +76,15 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
                              std::vector<CandidateScore>* scores, const DiscoveryOptions& o,
                              DiscoveryClock::time_point start);
 
+// The candidates `listed` (indices into *scores, restarts marked by an
+// earlier RefitShortlisted of the same scores) refitted side by side against
+// `now` and judged at the Wald level of `family` refits (at least as many
+// as listed): what RefitShortlisted does once it has its shortlist.
+RoundRefits RefitListed(const CandidatePass& pass, const ModelSnapshot& now, const Vehicle& declared,
+                        const std::vector<int>& listed, size_t family,
+                        const std::vector<EstimationLog>& estimation,
+                        const std::vector<EstimationLog>& validation,
+                        std::vector<CandidateScore>* scores, const DiscoveryOptions& o,
+                        DiscoveryClock::time_point start);
+
 }  // namespace coaxid
