@@ -67,7 +67,8 @@ PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& no
   pair.second = second.effect;
   pair.joint = std::move(refits.refits[refits.choice.added]);
   const ParameterSet& joint = pair.joint.snapshot.result.parameters;
-  // The first at the joint refit: inside its bounds, and there.
+  // The first at the joint refit: inside its bounds and significantly away
+  // from absence.
   std::string why;
   if (OwnParameterAtBound(first.effect, joint)) {
     why = first.effect + " stays at its bound beside " + second.effect;
