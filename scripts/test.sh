@@ -45,7 +45,7 @@ if [ "${1:-}" = "--sanitize" ]; then
   SANITIZE_SKIP+='|^StudyHeldScale\.FlightOnlyScaleMembersAreJudgedOnTheHeldScale$'
   SANITIZE_SKIP+='|^EkfEffectStates\.RefinedToTheTruthFromTwentyPercentOffOnRandomBars$'
   SANITIZE_SKIP+='|^DiscoverFlight\.ARefitThatDecidesItsRoundChangesNothingByStoppingTheRest$'
-  # The whole loop with a paired refit (24-34 s in Release on seeds 73-75,
+  # The whole loop with a paired refit (12 s in Release on the idle machine,
   # minutes here): RefitBesideABound runs in the Release tests only.
   SANITIZE_SKIP+='|^DiscoverFlight\.ABarBesideASwashplateBiasIsFoundAsAPair$'
   ctest --output-on-failure -j"$(nproc)" -E "$SANITIZE_SKIP"
