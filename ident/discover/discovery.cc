@@ -239,6 +239,15 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
   return true;
 }
 
+std::vector<std::string> ExcludedEffects(const std::vector<RemovedEffect>& removed,
+                                         int last_change_round) {
+  std::vector<std::string> excluded;
+  for (const RemovedEffect& r : removed) {
+    if (r.round >= last_change_round) excluded.push_back(r.effect);
+  }
+  return excluded;
+}
+
 DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLog>& estimation,
                          const std::vector<EstimationLog>& validation,
                          const DiscoveryOptions& options) {
@@ -314,6 +323,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   ModelSnapshot now = out.baseline;
   Say(options, "discover: sensitivities of " + std::to_string(pass.candidates.size()) +
                    " candidate effects along the fit: " + NumberText(pass.seconds, "%.1f s"));
+  int last_change_round = 0;  // the latest round whose addition stayed in the model
   for (int round = 1; round <= options.max_added + 1; ++round) {
     Say(options, "discover: round " + std::to_string(round) + ": scoring candidates against " +
                      (out.added.empty() ? std::string("the declared model")
@@ -323,8 +333,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     std::vector<CandidateScore> beside;  // a paired refit's, reported after the round's
     bool accepted = false;
     if (static_cast<int>(out.added.size()) < options.max_added) {
-      std::vector<std::string> removed;  // a removed effect does not come back (no cycling)
-      for (const RemovedEffect& r : out.removed) removed.push_back(r.effect);
+      const std::vector<std::string> removed = ExcludedEffects(out.removed, last_change_round);
       RoundRefits refits = RefitShortlisted(pass, now, declared, removed, estimation, validation,
                                             &scores, o, start);
       // The model with a refit: continued if it stopped at its cap, and
@@ -369,7 +378,13 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
           accepted = true;
         }
       }
-      if (accepted) DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out);
+      if (accepted) {
+        const std::string latest = out.added.back();
+        DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out);
+        if (std::find(out.added.begin(), out.added.end(), latest) != out.added.end()) {
+          last_change_round = round;
+        }
+      }
     }
     out.candidates.insert(out.candidates.end(), scores.begin(), scores.end());
     out.candidates.insert(out.candidates.end(), beside.begin(), beside.end());

@@ -45,7 +45,7 @@ struct PairedRefit {
 
 // `round`: the refits of a round against the current model (`pass`, `now`)
 // that chose nothing, `scores` the round's scores (the first's score is updated when
-// the pair is added). `excluded`: effects that may not come back.
+// the pair is added). `excluded`: removed effects not yet allowed back (ExcludedEffects).
 PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& now,
                               const RoundRefits& round,
                               std::vector<CandidateScore>* scores, const Vehicle& declared,

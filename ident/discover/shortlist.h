@@ -11,7 +11,7 @@
 namespace coaxid {
 
 // The candidates to refit (indices into scores), none of `excluded` (removed
-// effects do not come back): at most max_refits of those that pass the
+// effects not yet allowed back, ExcludedEffects): at most max_refits of those that pass the
 // linearised test; then, if the current fit holds parameters at a bound
 // (step 7), at most max_refits more, restarted off the bounds: first those
 // blind at the bounds (measured: an undeclared wind with Cx, Cy pressed to 0,

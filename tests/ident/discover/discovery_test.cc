@@ -175,5 +175,25 @@ TEST(Discover, EffectOutsideTheLibraryIsReportedUnexplained) {
   EXPECT_TRUE(j["candidates"][0].contains("p_value"));
 }
 
+// A removed effect stays out while the model it was judged redundant in is
+// unchanged, and comes back once a later addition stayed in the model.
+TEST(DiscoverRemovedEffects, ComeBackOnlyAfterTheModelChanged) {
+  RemovedEffect cg;
+  cg.effect = "cg_offset";
+  cg.round = 1;  // added and taken out in round 1
+  RemovedEffect wind;
+  wind.effect = "wind";
+  wind.round = 3;  // made redundant by round 3's addition
+  const std::vector<RemovedEffect> removed = {cg, wind};
+  // Round 1's addition did not stay: both are out.
+  EXPECT_EQ(ExcludedEffects(removed, 0), (std::vector<std::string>{"cg_offset", "wind"}));
+  EXPECT_EQ(ExcludedEffects(removed, 1), (std::vector<std::string>{"cg_offset", "wind"}));
+  // Round 2 added an effect that stayed: cg_offset may come back, wind (removed
+  // after it) not.
+  EXPECT_EQ(ExcludedEffects(removed, 2), (std::vector<std::string>{"wind"}));
+  EXPECT_EQ(ExcludedEffects(removed, 3), (std::vector<std::string>{"wind"}));
+  EXPECT_TRUE(ExcludedEffects(removed, 4).empty());
+}
+
 }  // namespace
 }  // namespace coaxid
