@@ -70,6 +70,7 @@ PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& no
   // The first at the joint refit: inside its bounds and significantly away
   // from absence.
   std::string why;
+  bool first_not_an_effect = true;  // beside the second: at its bound, or not significant
   if (OwnParameterAtBound(first.effect, joint)) {
     why = first.effect + " stays at its bound beside " + second.effect;
   } else {
@@ -99,6 +100,7 @@ PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& no
   const double held_out = std::isfinite(pair.share_of_excess_held_out)
                               ? pair.share_of_excess_held_out
                               : pair.share_of_excess;
+  if (why.empty()) first_not_an_effect = false;
   if (why.empty() &&
       !(pair.share_of_excess >= o.min_share_of_excess && held_out >= o.min_share_of_excess)) {
     why = "the pair removes " + ShareText(pair.share_of_excess, pair.share_of_excess_held_out) +
@@ -114,7 +116,30 @@ PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& no
     const auto it = std::find_if(scores->begin(), scores->end(), [&](const CandidateScore& s) {
       return s.effect == second.effect;
     });
-    if (it == scores->end() || it->refitted) return pair;
+    if (it == scores->end()) return pair;
+    if (it->refitted) {
+      // The second qualified alone in the round and was held back only by
+      // the first's dominance (round_choice.h); beside it the first is not
+      // an effect: the second is added from its own refit of the round
+      // (measured, confusion study seed 10117, gyroscopic + wind with the
+      // balance log: the bar's refit at T_b = 10 s and d_u = 0 removed 92 %
+      // of all channels' excess and held back gyroscopic, which removed
+      // 100 % of its channels'; beside gyroscopic the bar stayed at its
+      // bounds and nothing was added).
+      const int vetoed = round.choice.vetoed;
+      if (!first_not_an_effect || vetoed < 0 ||
+          round.shortlist[vetoed] != static_cast<int>(it - scores->begin())) {
+        return pair;
+      }
+      pair.second_alone = true;
+      pair.joint = round.refits[vetoed];
+      it->confirmed = true;
+      it->why_not_confirmed.clear();
+      Say(o, "discover: added " + second.effect + " from its own refit of the round (removes " +
+                 ShareText(it->share_of_excess, it->share_of_excess_held_out) + "): " +
+                 first.effect + ", which held it back, is not an effect beside it");
+      return pair;
+    }
     Say(o, "discover: refitting " + second.effect + " alone, against the model without " +
                first.effect);
     RoundRefits alone = RefitListed(pass, now, declared, {static_cast<int>(it - scores->begin())},

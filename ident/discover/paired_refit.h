@@ -19,8 +19,12 @@
 // redundant leaves). When the pair is not added and the second had no refit
 // in the round (the first took its slot), the second is refitted alone
 // against the current model and judged like any candidate of the round (its
-// Wald level counting one refit more): added if it qualifies. Nothing else changes: a round that adds a single
-// effect, or holds no such refit, is not refitted again.
+// Wald level counting one refit more): added if it qualifies. When the
+// second did qualify alone in the round but was held back by the first's
+// dominance (round_choice.h), and beside it the first stays at its bound or
+// is not significant, the second is added from its own refit of the round.
+// Nothing else changes: a round that adds a single effect, or holds no such
+// refit, is not refitted again.
 #pragma once
 
 #include <limits>
