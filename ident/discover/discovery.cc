@@ -1,12 +1,10 @@
 #include "ident/discover/discovery.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <thread>
 
 #include "core/errors.h"
 #include "core/report.h"
@@ -127,19 +125,12 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
   worker_options.progress = nullptr;
   worker_options.num_threads = std::max(1, fit_options.num_threads / workers);
   std::vector<OutputErrorResult> refits(n);
-  std::atomic<int> next{0};
-  auto worker = [&] {
-    for (int k = next++; k < n; k = next++) {
-      Vehicle restarted = model;
-      restarted.parameters = fit.parameters;
-      for (const auto& [name, config] : restarts[k]) restarted.parameters.SetValue(name, config);
-      refits[k] = WarmRefit(restarted, logs, worker_options, model, fit, true);
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int w = 1; w < workers; ++w) threads.emplace_back(worker);
-  worker();
-  for (std::thread& t : threads) t.join();
+  SideBySide(n, workers, [&](int k) {
+    Vehicle restarted = model;
+    restarted.parameters = fit.parameters;
+    for (const auto& [name, config] : restarts[k]) restarted.parameters.SetValue(name, config);
+    refits[k] = WarmRefit(restarted, logs, worker_options, model, fit, true);
+  });
 
   int rows = 0;
   const double before = WeightedRss(logs, fit.predictions, fit.noise, &rows);

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <thread>
 
@@ -16,6 +17,17 @@ namespace coaxid {
 
 void Say(const DiscoveryOptions& o, const std::string& line) {
   if (o.progress) o.progress(line);
+}
+
+void SideBySide(int n, int workers, const std::function<void(int)>& task) {
+  std::atomic<int> next{0};
+  auto worker = [&] {
+    for (int k = next++; k < n; k = next++) task(k);
+  };
+  std::vector<std::thread> threads;
+  for (int w = 1; w < workers; ++w) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
 }
 
 void AddValidation(const std::vector<EstimationLog>& validation, const DiscoveryOptions& o,
@@ -151,16 +163,9 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     evaluate(k);
     refits[k].seconds = SecondsSince(t0);
   };
-  std::atomic<int> next{0};
-  auto worker = [&] {
-    for (int k = next++; k < n; k = next++) {
-      if (k <= decided_by.load()) one(k);
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int w = 1; w < workers; ++w) threads.emplace_back(worker);
-  worker();
-  for (std::thread& t : threads) t.join();
+  SideBySide(n, workers, [&](int k) {
+    if (k <= decided_by.load()) one(k);
+  });
   for (int k = 0; k < n; ++k) {
     CandidateScore& s = (*scores)[shortlist[k]];
     const int decider = decided_by.load();

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,10 @@ using DiscoveryClock = std::chrono::steady_clock;
 
 // A progress line, if the options ask for them.
 void Say(const DiscoveryOptions& o, const std::string& line);
+
+// task(0) ... task(n - 1), each once, on `workers` threads (this one among
+// them), taken in order as threads come free.
+void SideBySide(int n, int workers, const std::function<void(int)>& task);
 
 // The held-out side of a snapshot (nothing without held-out logs).
 void AddValidation(const std::vector<EstimationLog>& validation, const DiscoveryOptions& o,
