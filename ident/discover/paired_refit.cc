@@ -32,6 +32,12 @@ int FirstAtItsBound(const RoundRefits& round, const std::vector<CandidateScore>&
 
 }  // namespace
 
+int VetoedRefitOfTheSecond(const RoundRefits& round, int second, bool first_not_an_effect) {
+  const int vetoed = round.choice.vetoed;
+  if (!first_not_an_effect || vetoed < 0 || round.shortlist[vetoed] != second) return -1;
+  return vetoed;
+}
+
 PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& now,
                               const RoundRefits& round,
                               std::vector<CandidateScore>* scores, const Vehicle& declared,
@@ -126,11 +132,9 @@ PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& no
       // of all channels' excess and held back gyroscopic, which removed
       // 100 % of its channels'; beside gyroscopic the bar stayed at its
       // bounds and nothing was added).
-      const int vetoed = round.choice.vetoed;
-      if (!first_not_an_effect || vetoed < 0 ||
-          round.shortlist[vetoed] != static_cast<int>(it - scores->begin())) {
-        return pair;
-      }
+      const int vetoed =
+          VetoedRefitOfTheSecond(round, static_cast<int>(it - scores->begin()), first_not_an_effect);
+      if (vetoed < 0) return pair;
       pair.second_alone = true;
       pair.joint = round.refits[vetoed];
       it->confirmed = true;

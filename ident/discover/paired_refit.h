@@ -47,6 +47,13 @@ struct PairedRefit {
   std::string why_not;                 // not added, a first tried: why
 };
 
+// A refused pair's second added from its own refit of the round: the index
+// into round.refits of the refit the round held back (round_choice.h
+// `vetoed`) when it is the second's (`second`, an index into the round's
+// scores) and beside the second the first is not an effect (at its bound or
+// not significant); -1 otherwise.
+int VetoedRefitOfTheSecond(const RoundRefits& round, int second, bool first_not_an_effect);
+
 // `round`: the refits of a round against the current model (`pass`, `now`)
 // that chose nothing, `scores` the round's scores (the first's score is updated when
 // the pair is added). `excluded`: removed effects not yet allowed back (ExcludedEffects).
