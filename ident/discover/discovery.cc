@@ -97,7 +97,8 @@ OutputErrorResult Converged(const Vehicle& model, OutputErrorResult fit,
 // beta restarted together ended with beta back at its bound, the lower
 // rotor's thrust gone, where no constant moment is testable; beta restarted
 // alone within a candidate's refit removed 62 % of all the excess with the
-// candidate's own parameters near absence; wind and gyroscopic were added).
+// candidate's own parameters near absence; wind and gyroscopic were added.
+// Each alone: beta's restart ended at 195082, kept; wind alone was added).
 OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declared,
                                      OutputErrorResult fit, const std::vector<EstimationLog>& logs,
                                      const OutputErrorOptions& fit_options,

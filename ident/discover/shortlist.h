@@ -11,23 +11,23 @@
 namespace coaxid {
 
 // The candidates to refit (indices into scores), none of `excluded` (removed
-// effects not yet allowed back, ExcludedEffects): at most max_refits of those that pass the
-// linearised test; then, if the current fit holds parameters at a bound
-// (step 7), at most max_refits more, restarted off the bounds: first those
-// blind at the bounds (measured: an undeclared wind with Cx, Cy pressed to 0,
-// flight only, never refitted), then the testable ones acting on a channel
-// those parameters distort (`symptom_channels`): the linearisation at a bound
-// is a poor guide (measured: an undeclared ground effect at 0.13-0.9 m, Cz
-// pressed at its bound, predicted to remove 2 % of the excess, 90 % at the
+// effects not yet allowed back, ExcludedEffects): at most max_refits of those
+// that pass the linearised test; then, if the current fit holds parameters at a
+// bound (step 7), at most max_refits more, restarted off the bounds: first
+// those blind at the bounds (measured: an undeclared wind with Cx, Cy pressed
+// to 0, flight only, never refitted), then the testable ones acting on a
+// channel those parameters distort (`symptom_channels`): the linearisation at a
+// bound is a poor guide (measured: an undeclared ground effect at 0.13-0.9 m,
+// Cz pressed at its bound, predicted to remove 2 % of the excess, 90 % at the
 // refit; an undeclared CG offset with d and Iyy at bounds, never shortlisted
 // while three passing candidates filled the slots); then, up to max_refits in
 // all, the testable ones predicted to remove at least half of
-// min_share_of_excess. Largest predicted share first within each group; a
-// share above 1 (the linearised step would fit the channels below their
-// noise) says the linearisation failed, not how promising the candidate is,
-// and ranks last in its group (measured, seed 8000 of discover_controllers.yaml: an
-// undeclared ground effect, Cz at 0; wake_interference "predicted" 406 %
-// and took the slot ground_effect, at 0.6 %, needed).
+// min_share_of_excess. Largest predicted share first within each group; a share
+// above 1 (the linearised step would fit the channels below their noise) says
+// the linearisation failed, not how promising the candidate is, and ranks last
+// in its group (measured, seed 8000 of discover_controllers.yaml: an undeclared
+// ground effect, Cz at 0; wake_interference "predicted" 406 % and took the slot
+// ground_effect, at 0.6 %, needed).
 std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
                            const std::vector<std::string>& symptom_channels,
                            const std::vector<std::string>& excluded, int max_refits,
