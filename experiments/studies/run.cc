@@ -181,8 +181,13 @@ nlohmann::json DiscoverRun(const StudySpec& spec, const Vehicle& start, const Ve
                                              : nlohmann::json(nullptr)},
                       {"excess_removed_all_channels", c.excess_removed_all_channels}});
   }
+  nlohmann::json removed = nlohmann::json::array();  // step 5 judged again
+  for (const RemovedEffect& e : r.removed) {
+    removed.push_back({{"round", e.round}, {"effect", e.effect}});
+  }
   return {{"ok", true},
           {"added", r.added},
+          {"removed", removed},
           {"refits", refits},
           {"unexplained", unexplained},
           {"declared_rms_over_noise", declared_rms_ratio},

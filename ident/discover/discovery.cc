@@ -563,7 +563,13 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
              "with a parameter of its own at a bound is refitted with that candidate in the "
              "model, and the best candidate qualifying there is added with it if, at their "
              "joint refit, it is inside its bounds and significant and the pair removes at "
-             "least min_share_of_excess of their channels' excess error"},
+             "least min_share_of_excess of their channels' excess error (if beside it the first "
+             "stays at its bound or is not significant, a second the round held back is added "
+             "alone from its own refit); after each addition every added effect is judged again "
+             "and one that no longer removes min_share_of_excess is removed, a candidate again "
+             "once a later addition stays in the model; a fit that leaves parameters at a bound "
+             "is refitted with them restarted at their config values, all together and each "
+             "alone, and the lowest weighted RSS below the fit's is kept"},
             {"min_share_of_excess", options.min_share_of_excess},
             {"min_channels_excess", options.min_channels_excess},
             {"max_refits", options.max_refits},
