@@ -91,14 +91,16 @@ OutputErrorResult Converged(const Vehicle& model, OutputErrorResult fit,
 // config values.
 //
 // Restarted all together they may land in another wrong basin that one of
-// them restarted alone avoids: the restarts are all together and each alone,
-// side by side, and the lowest weighted RSS is kept (measured, seed 9909 of
-// the confusion study, swashplate bias + wind, flight only: Cx, Cy, Cz and
-// beta restarted together ended with beta back at its bound, the lower
-// rotor's thrust gone, where no constant moment is testable; beta restarted
-// alone within a candidate's refit removed 62 % of all the excess with the
-// candidate's own parameters near absence; wind and gyroscopic were added.
-// Each alone: beta's restart ended at 195082, kept; wind alone was added).
+// them restarted alone avoids: when the restart all together gains, each is
+// also restarted alone, side by side, and the lowest weighted RSS is kept
+// (measured, seed 9909 of the confusion study, swashplate bias + wind, flight
+// only: Cx, Cy, Cz and beta restarted together ended with beta back at its
+// bound, the lower rotor's thrust gone, where no constant moment is testable;
+// beta restarted alone within a candidate's refit removed 62 % of all the
+// excess with the candidate's own parameters near absence; wind and
+// gyroscopic were added. Each alone: beta's restart ended at 195082, kept;
+// wind alone was added). A restart replaces the fit only when it gains at
+// least restart_min_gain of the weighted RSS (DiscoveryOptions).
 OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declared,
                                      OutputErrorResult fit, const std::vector<EstimationLog>& logs,
                                      const OutputErrorOptions& fit_options,
@@ -106,10 +108,6 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
   const std::map<std::string, double> configs =
       ConfigValuesOfSymptomaticParameters(fit.parameters, declared);
   if (configs.empty()) return fit;
-  std::vector<std::map<std::string, double>> restarts = {configs};
-  if (configs.size() > 1) {
-    for (const auto& [name, config] : configs) restarts.push_back({{name, config}});
-  }
   auto names_of = [](const std::map<std::string, double>& r) {
     std::string names;
     for (const auto& [name, config] : r) names += (names.empty() ? "" : ", ") + name;
@@ -118,46 +116,64 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
   Say(options, "discover: the fit left " + names_of(configs) +
                    " at a bound or far outside the physical range: refitting from their config "
                    "values" +
-                   (restarts.size() > 1 ? std::string(", all together and each alone") : ""));
-  // Side by side, each with its share of the threads, silent.
-  const int n = static_cast<int>(restarts.size());
-  const int workers = std::max(1, std::min(n, fit_options.num_threads));
-  OutputErrorOptions worker_options = fit_options;
-  worker_options.progress = nullptr;
-  worker_options.num_threads = std::max(1, fit_options.num_threads / workers);
-  std::vector<OutputErrorResult> refits(n);
-  SideBySide(n, workers, [&](int k) {
-    Vehicle restarted = model;
-    restarted.parameters = fit.parameters;
-    for (const auto& [name, config] : restarts[k]) restarted.parameters.SetValue(name, config);
-    refits[k] = WarmRefit(restarted, logs, worker_options, model, fit, true);
-  });
-
+                   (configs.size() > 1 ? std::string(", all together first") : ""));
   int rows = 0;
   const double before = WeightedRss(logs, fit.predictions, fit.noise, &rows);
-  int best = -1;
-  double lowest = before;
-  for (int k = 0; k < n; ++k) {
-    if (!refits[k].usable) {
-      Say(options, "discover: the fit restarted with " + names_of(restarts[k]) +
-                       " at the config values failed: " + refits[k].why_not_usable);
-      continue;
+  const double enough = before * (1 - options.restart_min_gain);
+  std::vector<std::map<std::string, double>> restarts;
+  std::vector<OutputErrorResult> refits;
+  std::vector<double> rss;
+  // Restarts side by side, each with its share of the threads, silent; the
+  // weighted RSS of each, at the fit's noise weights.
+  auto restart = [&](const std::vector<std::map<std::string, double>>& batch) {
+    const int n = static_cast<int>(batch.size());
+    const int workers = std::max(1, std::min(n, fit_options.num_threads));
+    OutputErrorOptions worker_options = fit_options;
+    worker_options.progress = nullptr;
+    worker_options.num_threads = std::max(1, fit_options.num_threads / workers);
+    std::vector<OutputErrorResult> done(n);
+    SideBySide(n, workers, [&](int k) {
+      Vehicle restarted = model;
+      restarted.parameters = fit.parameters;
+      for (const auto& [name, config] : batch[k]) restarted.parameters.SetValue(name, config);
+      done[k] = WarmRefit(restarted, logs, worker_options, model, fit, true);
+    });
+    for (int k = 0; k < n; ++k) {
+      restarts.push_back(batch[k]);
+      double after = INFINITY;
+      if (!done[k].usable) {
+        Say(options, "discover: the fit restarted with " + names_of(batch[k]) +
+                         " at the config values failed: " + done[k].why_not_usable);
+      } else {
+        after = WeightedRss(logs, done[k].predictions, fit.noise, &rows);
+        Say(options, "discover: the fit restarted with " + names_of(batch[k]) +
+                         " at the config values: weighted RSS " + NumberText(after, "%.6g") +
+                         " against " + NumberText(before, "%.6g"));
+      }
+      refits.push_back(std::move(done[k]));
+      rss.push_back(after);
     }
-    const double after = WeightedRss(logs, refits[k].predictions, fit.noise, &rows);
-    Say(options, "discover: the fit restarted with " + names_of(restarts[k]) +
-                     " at the config values: weighted RSS " + NumberText(after, "%.6g") +
-                     " against " + NumberText(before, "%.6g"));
-    if (after < lowest) {
-      lowest = after;
-      best = k;
+  };
+  restart({configs});
+  if (configs.size() > 1) {
+    if (rss[0] <= enough) {
+      std::vector<std::map<std::string, double>> singles;
+      for (const auto& [name, config] : configs) singles.push_back({{name, config}});
+      restart(singles);
+    } else {
+      Say(options, "discover: restarted all together they gain less than " +
+                       NumberText(100 * options.restart_min_gain, "%.2g") +
+                       " % of it: not restarted each alone");
     }
   }
-  if (best < 0) {
-    Say(options, "discover: no restart fits better: the fit is kept");
+  const int best = static_cast<int>(std::min_element(rss.begin(), rss.end()) - rss.begin());
+  if (!(rss[best] <= enough)) {
+    Say(options, "discover: no restart fits better by " +
+                     NumberText(100 * options.restart_min_gain, "%.2g") + " %: the fit is kept");
     return fit;
   }
   *note = "the fit restarted with " + names_of(restarts[best]) +
-          " at the config values: weighted RSS " + NumberText(lowest, "%.6g") + " against " +
+          " at the config values: weighted RSS " + NumberText(rss[best], "%.6g") + " against " +
           NumberText(before, "%.6g") + ": kept";
   Say(options, "discover: " + *note);
   return Converged(model, std::move(refits[best]), logs, fit_options, options);
@@ -196,6 +212,10 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
   }
   if (!(decisive_share_of_all_excess > 0)) {
     *why = "decisive_share_of_all_excess must be > 0";
+    return false;
+  }
+  if (!(restart_min_gain >= 0 && restart_min_gain < 1)) {
+    *why = "restart_min_gain must be in [0, 1)";
     return false;
   }
   if (!dictionary.IsValid(why)) return false;
@@ -574,6 +594,7 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
             {"min_channels_excess", options.min_channels_excess},
             {"max_refits", options.max_refits},
             {"decisive_share_of_all_excess", options.decisive_share_of_all_excess},
+            {"restart_min_gain", options.restart_min_gain},
             {"whiteness_test", "Ljung-Box, chi-square p-value by the regularized incomplete gamma"},
             {"ljung_box_lags", options.residuals.lags},
             {"unexplained_rms_ratio", options.unexplained_rms_ratio},
