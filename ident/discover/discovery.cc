@@ -444,8 +444,17 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         }
       }
       if (accepted) {
+        // Taking one effect out changes what the others remove: they are
+        // judged again, in the model without it, until none is redundant
+        // (measured, seed 10268 of the confusion study, swashplate bias with
+        // the balance log: wind and cg_offset added as a pair in round 1;
+        // with swashplate_bias added in round 2, without wind the rest lost
+        // 0.2 % of wind's channels' excess and without cg_offset 0.0 %;
+        // cg_offset was taken out and wind, judged once, stayed).
         const std::string latest = out.added.back();
-        DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out);
+        while (DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out) &&
+               std::find(out.added.begin(), out.added.end(), latest) != out.added.end()) {
+        }
         if (std::find(out.added.begin(), out.added.end(), latest) != out.added.end()) {
           last_change_round = round;
         }
