@@ -119,7 +119,6 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
                    (configs.size() > 1 ? std::string(", all together first") : ""));
   int rows = 0;
   const double before = WeightedRss(logs, fit.predictions, fit.noise, &rows);
-  const double enough = before * (1 - options.restart_min_gain);
   std::vector<std::map<std::string, double>> restarts;
   std::vector<OutputErrorResult> refits;
   std::vector<double> rss;
@@ -156,7 +155,7 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
   };
   restart({configs});
   if (configs.size() > 1) {
-    if (rss[0] <= enough) {
+    if (RestartThatGains(before, rss, options.restart_min_gain) == 0) {
       std::vector<std::map<std::string, double>> singles;
       for (const auto& [name, config] : configs) singles.push_back({{name, config}});
       restart(singles);
@@ -166,8 +165,8 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
                        " % of it: not restarted each alone");
     }
   }
-  const int best = static_cast<int>(std::min_element(rss.begin(), rss.end()) - rss.begin());
-  if (!(rss[best] <= enough)) {
+  const int best = RestartThatGains(before, rss, options.restart_min_gain);
+  if (best < 0) {
     Say(options, "discover: no restart fits better by " +
                      NumberText(100 * options.restart_min_gain, "%.2g") + " %: the fit is kept");
     return fit;
@@ -302,6 +301,12 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
   *pass = std::move(worst_pass);
   *now = std::move(worst_snapshot);
   return true;
+}
+
+int RestartThatGains(double before, const std::vector<double>& after, double min_gain) {
+  if (after.empty()) return -1;
+  const int best = static_cast<int>(std::min_element(after.begin(), after.end()) - after.begin());
+  return after[best] <= before * (1 - min_gain) ? best : -1;
 }
 
 std::vector<std::string> ExcludedEffects(const std::vector<RemovedEffect>& removed,

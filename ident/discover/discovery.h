@@ -173,6 +173,12 @@ struct DiscoveryResult {
 std::vector<std::string> ExcludedEffects(const std::vector<RemovedEffect>& removed,
                                          int last_change_round);
 
+// Of the weighted RSS of restarts off the bounds (`after`, INFINITY: failed),
+// the index of the lowest if it lies at least min_gain (a fraction) below the
+// fit's `before`, else -1: a smaller gain is the same basin
+// (DiscoveryOptions::restart_min_gain).
+int RestartThatGains(double before, const std::vector<double>& after, double min_gain);
+
 // Throws InputError on invalid options or unusable logs; ComputationError if
 // the declared model's fit fails.
 DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLog>& estimation,

@@ -195,5 +195,21 @@ TEST(DiscoverRemovedEffects, ComeBackOnlyAfterTheModelChanged) {
   EXPECT_TRUE(ExcludedEffects(removed, 4).empty());
 }
 
+// The weighted RSS of measured restarts (discovery.h, restart_min_gain).
+TEST(DiscoverRestartsOffBounds, ReplaceTheFitOnlyForAGainBeyondTheSameBasin) {
+  const double gain = DiscoveryOptions().restart_min_gain;
+  // Seed 10237 (confusion, CG offset, flight only): restarted all together
+  // 188756 against 188169, Iyy alone 188117 (0.03 %): the same basin.
+  EXPECT_EQ(RestartThatGains(188169, {188756}, gain), -1);
+  EXPECT_EQ(RestartThatGains(188169, {188756, 188753, 188117}, gain), -1);
+  // Seed 9909 (confusion, swashplate bias + wind, flight only): all together
+  // 226466 against 231029 (2 %), beta alone 195082: beta's restart.
+  EXPECT_EQ(RestartThatGains(231029, {226466}, gain), 0);
+  EXPECT_EQ(RestartThatGains(231029, {226466, 224854, 245307, 267920, 195082}, gain), 4);
+  // A failed restart (infinite) never replaces the fit; none at all neither.
+  EXPECT_EQ(RestartThatGains(231029, {INFINITY, INFINITY}, gain), -1);
+  EXPECT_EQ(RestartThatGains(231029, {}, gain), -1);
+}
+
 }  // namespace
 }  // namespace coaxid
