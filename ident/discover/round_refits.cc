@@ -249,7 +249,8 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
   }
   MarkRestartsAtBounds(pass.fitted, declared, distorted, estimation, pass.fit.noise, scores);
   const std::vector<int> shortlist =
-      Shortlist(*scores, symptom_channels, excluded, o.max_refits, o.min_share_of_excess);
+      Shortlist(*scores, symptom_channels, excluded, o.max_refits, o.min_share_of_excess,
+                o.alpha);
   for (int k : shortlist) {
     const CandidateScore& s = (*scores)[k];
     if (s.restart_values.empty()) continue;

@@ -7,7 +7,7 @@ namespace coaxid {
 std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
                            const std::vector<std::string>& symptom_channels,
                            const std::vector<std::string>& excluded, int max_refits,
-                           double min_share_of_excess) {
+                           double min_share_of_excess, double alpha) {
   std::vector<int> passing, blind, symptomatic, promising;
   for (size_t k = 0; k < scores.size(); ++k) {
     const CandidateScore& s = scores[k];
@@ -37,6 +37,15 @@ std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
   std::vector<int> at_bounds = blind;
   at_bounds.insert(at_bounds.end(), symptomatic.begin(), symptomatic.end());
   take(at_bounds, at_most, &out);
+  if (!symptomatic.empty()) {
+    const int most_significant = *std::min_element(
+        symptomatic.begin(), symptomatic.end(),
+        [&](int a, int b) { return scores[a].p_value < scores[b].p_value; });
+    if (scores[most_significant].p_value < alpha &&
+        std::find(out.begin(), out.end(), most_significant) == out.end()) {
+      out.push_back(most_significant);
+    }
+  }
   take(promising, at_most > out.size() ? at_most - out.size() : 0, &out);
   return out;
 }
