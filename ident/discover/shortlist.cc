@@ -37,16 +37,22 @@ std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
   std::vector<int> at_bounds = blind;
   at_bounds.insert(at_bounds.end(), symptomatic.begin(), symptomatic.end());
   take(at_bounds, at_most, &out);
-  if (!symptomatic.empty()) {
-    const int most_significant = *std::min_element(
-        symptomatic.begin(), symptomatic.end(),
-        [&](int a, int b) { return scores[a].p_value < scores[b].p_value; });
-    if (scores[most_significant].p_value < alpha &&
-        std::find(out.begin(), out.end(), most_significant) == out.end()) {
-      out.push_back(most_significant);
+  take(promising, at_most > out.size() ? at_most - out.size() : 0, &out);
+  // The most significant by its score test (uncorrected), when the shares
+  // left it out.
+  int most_significant = -1;
+  for (size_t k = 0; k < scores.size(); ++k) {
+    const CandidateScore& s = scores[k];
+    if (!s.testable || s.passes || s.blind_at_bounds) continue;
+    if (std::find(excluded.begin(), excluded.end(), s.effect) != excluded.end()) continue;
+    if (most_significant < 0 || s.p_value < scores[most_significant].p_value) {
+      most_significant = static_cast<int>(k);
     }
   }
-  take(promising, at_most > out.size() ? at_most - out.size() : 0, &out);
+  if (most_significant >= 0 && scores[most_significant].p_value < alpha &&
+      std::find(out.begin(), out.end(), most_significant) == out.end()) {
+    out.push_back(most_significant);
+  }
   return out;
 }
 

@@ -85,6 +85,27 @@ TEST(Shortlist, TheMostSignificantAtABoundIsRefittedWhenTheSharesLeaveItOut) {
             (std::vector<std::string>{"wind", "accel_bias", "motor_lag"}));
 }
 
+// Seed 9379 of discover_controllers.yaml (gyroscopic moments and rotor
+// damping with the balance log, no parameter at a bound), its round-1
+// scores: none passes Holm, none is predicted to remove half of the
+// threshold; gyroscopic, the most significant (p = 0.0011), is refitted.
+TEST(Shortlist, TheMostSignificantIsRefittedWhenNothingElseIs) {
+  std::vector<CandidateScore> scores = {
+      Score("gyroscopic", 0.123, false, {"p", "q", "r"}),
+      Score("wind", 0.005, false, {"u", "v", "w"}),
+      Score("servo_lag", 0.001, false, {"ax", "ay", "p", "q"}),
+      Score("rotor_damping", 0.101, false, {"p", "q"}),
+      Score("stabilizer_bar", 0.142, false, {"p", "q"})};
+  const double p_values[] = {0.00108, 0.00233, 0.00234, 0.00698, 0.0594};
+  for (size_t k = 0; k < scores.size(); ++k) scores[k].p_value = p_values[k];
+  EXPECT_EQ(Names(scores, Shortlist(scores, {}, {}, 3, 0.3, 0.01)),
+            (std::vector<std::string>{"gyroscopic"}));
+  // Not below alpha: nothing.
+  scores[0].p_value = 0.014;
+  scores[1].p_value = scores[2].p_value = scores[3].p_value = 0.02;
+  EXPECT_TRUE(Shortlist(scores, {}, {}, 3, 0.3, 0.01).empty());
+}
+
 TEST(Shortlist, PassingFirstThenAtBoundsThenPromisingEachCapped) {
   const std::vector<CandidateScore> scores = {
       Score("a", 0.5, true),  Score("b", 0.9, true),    Score("c", 0.2, true),
