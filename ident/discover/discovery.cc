@@ -588,7 +588,8 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
              "sensitivities, estimated directions projected out), cluster-robust over "
              "multiple-shooting segments and balance holds (Hotelling T^2, F(q, M - q)); it "
              "shortlists: the passing candidates and those predicted to remove at least half "
-             "of min_share_of_excess are refitted jointly (at most max_refits); a refit "
+             "of min_share_of_excess are refitted jointly (at most max_refits), and the one "
+             "with the smallest p-value if below alpha before Holm and not yet listed; a refit "
              "qualifies if its cluster-robust Wald p < alpha / refits, no parameter of it sits "
              "at a bound and it removes at least min_share_of_excess of its channels' excess "
              "error (an excess of at least min_channels_excess) on the estimation and the "
@@ -600,10 +601,12 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
              "least min_share_of_excess of their channels' excess error (if beside it the first "
              "stays at its bound or is not significant, a second the round held back is added "
              "alone from its own refit); after each addition every added effect is judged again "
-             "and one that no longer removes min_share_of_excess is removed, a candidate again "
-             "once a later addition stays in the model; a fit that leaves parameters at a bound "
-             "is refitted with them restarted at their config values, all together and each "
-             "alone, and the lowest weighted RSS below the fit's is kept"},
+             "and one that no longer removes min_share_of_excess is removed (the least useful "
+             "first, the others judged again without it), a candidate again once a later "
+             "addition stays in the model; a fit that leaves parameters at a bound is refitted "
+             "with them restarted at their config values, all together and, if that gains "
+             "restart_min_gain of the weighted RSS, each alone; the lowest weighted RSS is kept "
+             "if it gains that much"},
             {"min_share_of_excess", options.min_share_of_excess},
             {"min_channels_excess", options.min_channels_excess},
             {"max_refits", options.max_refits},
