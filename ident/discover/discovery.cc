@@ -609,9 +609,9 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
              "and one that no longer removes min_share_of_excess is removed (the least useful "
              "first, the others judged again without it), a candidate again once a later "
              "addition stays in the model; a fit that leaves parameters at a bound is refitted "
-             "with them restarted at their config values, all together and, if that gains "
-             "restart_min_gain of the weighted RSS, each alone; the lowest weighted RSS is kept "
-             "if it gains that much"},
+             "with them restarted at their config values, all together and, unless that ends "
+             "within restart_min_gain of the fit's weighted RSS, each alone; the lowest "
+             "weighted RSS is kept if it gains that much"},
             {"min_share_of_excess", options.min_share_of_excess},
             {"min_channels_excess", options.min_channels_excess},
             {"max_refits", options.max_refits},

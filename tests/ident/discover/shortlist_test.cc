@@ -2,8 +2,8 @@
 // ones first, then those a parameter at its bound may hide (blind ones
 // before those acting on the distorted channels), then promising ones, each
 // group capped and ranked by the linearised share, where a share above 1
-// (a failed linearisation) ranks last; the most significant at a bound by its
-// score test is refitted too.
+// (a failed linearisation) ranks last; the most significant by its score
+// test, below alpha before Holm, is refitted too.
 #include "ident/discover/shortlist.h"
 
 #include <string>
