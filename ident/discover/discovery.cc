@@ -127,10 +127,8 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
   // weighted RSS of each, at the fit's noise weights.
   auto restart = [&](const std::vector<std::map<std::string, double>>& batch) {
     const int n = static_cast<int>(batch.size());
-    const int workers = std::max(1, std::min(n, fit_options.num_threads));
-    OutputErrorOptions worker_options = fit_options;
-    worker_options.progress = nullptr;
-    worker_options.num_threads = std::max(1, fit_options.num_threads / workers);
+    OutputErrorOptions worker_options;
+    const int workers = SideBySideWorkers(n, fit_options, &worker_options);
     std::vector<OutputErrorResult> done(n);
     SideBySide(n, workers, [&](int k) {
       Vehicle restarted = model;

@@ -75,9 +75,10 @@ struct DiscoveryOptions {
   // restarts (20 of several parameters) on flight and flight + balance logs
   // (seeds of the confusion and controllers studies): the gains were either
   // at most 0.03 % or at least 0.83 %, and where all together ended within
-  // 0.2 % of the fit (13 of the 20) no restart alone gained more than 0.03 %. All together can also fail far above the
-  // fit where each alone gains (seed 10420, a swashplate bias, flight only:
-  // 7.3e7 against 185533; beta alone 175278, kept, and the bias was found).
+  // 0.2 % of the fit (13 of the 20) no restart alone gained more than
+  // 0.03 %. All together can also fail far above the fit where each alone
+  // gains (seed 10420, a swashplate bias, flight only: 7.3e7 against 185533;
+  // beta alone 175278, kept, and the bias was found).
   double restart_min_gain = 0.002;
   // With a flight log, start the declared fit from a short EKF pass at the
   // final segment length (ident/ekf/ekf_start.h) instead of the config's

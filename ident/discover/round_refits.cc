@@ -19,6 +19,14 @@ void Say(const DiscoveryOptions& o, const std::string& line) {
   if (o.progress) o.progress(line);
 }
 
+int SideBySideWorkers(int n, const OutputErrorOptions& fit, OutputErrorOptions* worker) {
+  const int workers = std::max(1, std::min(n, fit.num_threads));
+  *worker = fit;
+  worker->progress = nullptr;
+  worker->num_threads = std::max(1, fit.num_threads / workers);
+  return workers;
+}
+
 void SideBySide(int n, int workers, const std::function<void(int)>& task) {
   std::atomic<int> next{0};
   auto worker = [&] {
@@ -109,9 +117,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   // silent (side by side: the loop reports each result).
   DiscoveryOptions worker_options = o;
   OutputErrorOptions& fit = worker_options.fit;
-  fit.progress = nullptr;
-  const int workers = std::max(1, std::min(n, o.fit.num_threads));
-  fit.num_threads = std::max(1, o.fit.num_threads / workers);
+  const int workers = SideBySideWorkers(n, o.fit, &fit);
   const double level = WaldLevel(o, family);
   // The first (in shortlist order) refit that qualifies and removes at least
   // decisive_share_of_all_excess of the excess over all channels; the refits

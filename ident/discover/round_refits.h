@@ -26,6 +26,11 @@ void Say(const DiscoveryOptions& o, const std::string& line);
 // them), taken in order as threads come free.
 void SideBySide(int n, int workers, const std::function<void(int)>& task);
 
+// How n fits run side by side on fit.num_threads threads: the number of
+// workers (at most n), and in *worker each one's fit options, its share of
+// the threads, silent (the loop reports each result).
+int SideBySideWorkers(int n, const OutputErrorOptions& fit, OutputErrorOptions* worker);
+
 // The held-out side of a snapshot (nothing without held-out logs).
 void AddValidation(const std::vector<EstimationLog>& validation, const DiscoveryOptions& o,
                    ModelSnapshot* s);

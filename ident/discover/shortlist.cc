@@ -9,9 +9,14 @@ std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
                            const std::vector<std::string>& excluded, int max_refits,
                            double min_share_of_excess, double alpha) {
   std::vector<int> passing, blind, symptomatic, promising;
+  int most_significant = -1;  // by the score test, of the testable ones that do not pass
   for (size_t k = 0; k < scores.size(); ++k) {
     const CandidateScore& s = scores[k];
     if (std::find(excluded.begin(), excluded.end(), s.effect) != excluded.end()) continue;
+    if (s.testable && !s.passes && !s.blind_at_bounds &&
+        (most_significant < 0 || s.p_value < scores[most_significant].p_value)) {
+      most_significant = static_cast<int>(k);
+    }
     if (s.passes) {
       passing.push_back(static_cast<int>(k));
     } else if (s.blind_at_bounds) {
@@ -40,15 +45,6 @@ std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
   take(promising, at_most > out.size() ? at_most - out.size() : 0, &out);
   // The most significant by its score test (uncorrected), when the shares
   // left it out.
-  int most_significant = -1;
-  for (size_t k = 0; k < scores.size(); ++k) {
-    const CandidateScore& s = scores[k];
-    if (!s.testable || s.passes || s.blind_at_bounds) continue;
-    if (std::find(excluded.begin(), excluded.end(), s.effect) != excluded.end()) continue;
-    if (most_significant < 0 || s.p_value < scores[most_significant].p_value) {
-      most_significant = static_cast<int>(k);
-    }
-  }
   if (most_significant >= 0 && scores[most_significant].p_value < alpha &&
       std::find(out.begin(), out.end(), most_significant) == out.end()) {
     out.push_back(most_significant);
