@@ -146,8 +146,9 @@ inline constexpr double kFarOutsidePhysicalRange = 2.0;
 
 // The physical-range findings (core/plausibility.h) of the declared
 // parameters `fit` estimates whose value lies kFarOutsidePhysicalRange times
-// beyond a limit of the range (single parameters only: the inertias'
-// triangle inequality names no one parameter to restart).
+// beyond a limit of the range; and, when the largest principal moment of
+// inertia is kFarOutsidePhysicalRange times the sum of the other two, one
+// for each estimated inertia, its range the triangle inequality leaves it.
 std::vector<PlausibilityFinding> FarOutsidePhysicalRange(const ParameterSet& fit,
                                                          const ParameterSet& declared);
 
