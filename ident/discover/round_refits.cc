@@ -254,9 +254,21 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
     for (const std::string& c : distorted[name]) symptom_channels.push_back(c);
   }
   MarkRestartsAtBounds(pass.fitted, declared, distorted, estimation, pass.fit.noise, scores);
+  std::vector<std::string> lost;  // distorted channels the fit predicts no better than their mean
+  for (const auto& [channel, error] : now.fit) {
+    if (error.nrmse >= kUnexplainedNrmse && ReachesAny({channel}, symptom_channels)) {
+      lost.push_back(channel);
+    }
+  }
   const std::vector<int> shortlist =
       Shortlist(*scores, symptom_channels, excluded, o.max_refits, o.min_share_of_excess,
-                o.alpha);
+                o.alpha, lost);
+  if (!lost.empty()) {
+    std::string names;
+    for (const std::string& c : lost) names += (names.empty() ? "" : ", ") + c;
+    Say(o, "  the fit at the bounds predicts " + names +
+               " no better than their mean: every candidate acting there is refitted");
+  }
   for (int k : shortlist) {
     const CandidateScore& s = (*scores)[k];
     if (s.restart_values.empty()) continue;
