@@ -254,12 +254,7 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
     for (const std::string& c : distorted[name]) symptom_channels.push_back(c);
   }
   MarkRestartsAtBounds(pass.fitted, declared, distorted, estimation, pass.fit.noise, scores);
-  std::vector<std::string> lost;  // distorted channels the fit predicts no better than their mean
-  for (const auto& [channel, error] : now.fit) {
-    if (error.nrmse >= kUnexplainedNrmse && ReachesAny({channel}, symptom_channels)) {
-      lost.push_back(channel);
-    }
-  }
+  const std::vector<std::string> lost = LostChannels(now.fit, now.residual_tests, symptom_channels);
   const std::vector<int> shortlist =
       Shortlist(*scores, symptom_channels, excluded, o.max_refits, o.min_share_of_excess,
                 o.alpha, lost);

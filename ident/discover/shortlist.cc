@@ -60,4 +60,18 @@ std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
   return out;
 }
 
+std::vector<std::string> LostChannels(const std::map<std::string, FitError>& fit,
+                                      const std::vector<ChannelResidualTest>& residual_tests,
+                                      const std::vector<std::string>& symptom_channels) {
+  std::vector<std::string> lost;
+  for (const ChannelResidualTest& t : residual_tests) {
+    const auto error = fit.find(t.channel);
+    if (error != fit.end() && error->second.nrmse >= kUnexplainedNrmse &&
+        t.rms >= kLostChannelRms * t.noise_std && ReachesAny({t.channel}, symptom_channels)) {
+      lost.push_back(t.channel);
+    }
+  }
+  return lost;
+}
+
 }  // namespace coaxid

@@ -3,12 +3,27 @@
 // group, in order of promise.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
+#include "core/statistics.h"
 #include "ident/discover/candidate_scores.h"
+#include "ident/discover/residual_analysis.h"
 
 namespace coaxid {
+
+// The channels of `symptom_channels` (distorted by parameters at a bound or
+// far outside their range) that the fit has lost: it predicts them no better
+// than their mean (nrmse >= kUnexplainedNrmse) and their residual is
+// kLostChannelRms times their noise or more, a signal of their own the fit
+// does not follow rather than a channel that holds little besides noise
+// (measured: hover's ax, ay at nrmse 0.95-0.97 and 1.0-1.2 x their noise;
+// p, q of seeds 9537, 9573, 10339 at nrmse 0.94-1.01 and 3.0-6.6 x).
+inline constexpr double kLostChannelRms = 2.0;
+std::vector<std::string> LostChannels(const std::map<std::string, FitError>& fit,
+                                      const std::vector<ChannelResidualTest>& residual_tests,
+                                      const std::vector<std::string>& symptom_channels);
 
 // The candidates to refit (indices into scores), none of `excluded` (removed
 // effects not yet allowed back, ExcludedEffects): at most max_refits of those
@@ -43,7 +58,8 @@ namespace coaxid {
 // it removes 70 %). Where a bound leaves the score no power (every p-value
 // 0.5-1) nothing is added to the shortlist.
 // Where the fit at the bounds has lost channels (`lost_channels`: those it
-// predicts no better than their mean), its linearisation says nothing about
+// predicts no better than their mean, with a residual kLostChannelRms times
+// their noise), its linearisation says nothing about
 // which candidate acts there: every testable one acting on a symptom channel
 // and on a lost one is refitted, beyond the slots (measured: seeds 9573 and
 // 9537 of the controllers study, a stabilizer bar and a swashplate bias,

@@ -134,6 +134,28 @@ TEST(Shortlist, EveryCandidateOnAChannelTheFitHasLostIsRefitted) {
             (std::vector<std::string>{}));
 }
 
+// Seed 9573's declared fit: ax at nrmse 0.95 and 1.0 x its noise holds
+// little besides noise; p at nrmse 1.00 and 3.6 x, q at 1.01 and 3.0 x are
+// lost; theta at 0.83 and 2.0 x is still followed; r is lost but no symptom
+// distorts it.
+TEST(LostChannels, PredictedNoBetterThanTheMeanAndWellAboveTheNoise) {
+  auto test = [](const std::string& channel, double rms_over_noise) {
+    ChannelResidualTest t;
+    t.channel = channel;
+    t.noise_std = 0.01;
+    t.rms = rms_over_noise * t.noise_std;
+    return t;
+  };
+  const std::map<std::string, FitError> fit = {
+      {"ax", {0.1, 0.95, 100}}, {"p", {0.1, 1.00, 100}}, {"q", {0.1, 1.01, 100}},
+      {"theta", {0.1, 0.83, 100}}, {"r", {0.1, 0.99, 100}}};
+  const std::vector<ChannelResidualTest> tests = {test("ax", 1.0), test("p", 3.6), test("q", 3.0),
+                                                  test("theta", 2.0), test("r", 5.0)};
+  EXPECT_EQ(LostChannels(fit, tests, {"ax", "p", "q", "theta"}),
+            (std::vector<std::string>{"p", "q"}));
+  EXPECT_TRUE(LostChannels(fit, tests, {}).empty());  // no parameter at a bound
+}
+
 TEST(Shortlist, PassingFirstThenAtBoundsThenPromisingEachCapped) {
   const std::vector<CandidateScore> scores = {
       Score("a", 0.5, true),  Score("b", 0.9, true),    Score("c", 0.2, true),
