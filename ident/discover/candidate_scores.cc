@@ -390,8 +390,9 @@ std::vector<PlausibilityFinding> FarOutsidePhysicalRange(const ParameterSet& fit
   // largest principal moment is kFarOutsidePhysicalRange times the sum of the
   // other two, each of the three lies that far outside the range the other
   // two leave it, [|a - b|, a + b]. Measured: the four fresh runs whose final
-  // model broke it that far (of 400, sessions of 2026-11-29) all ended wrong
-  // (9524: Ixx 80 x Iyy + Izz, gyroscopic missed), the rest broke it by at
+  // model broke it that far (of 400, judged 2026-11-29) had all missed or
+  // added the wrong effect (9524: Ixx 80 x Iyy + Izz, gyroscopic missed;
+  // restarted off there, it is found), the rest broke it by at
   // most 1.5 x, as the study's randomised truths (Ixx, Iyy 30 % apart, Izz
   // small) do themselves.
   const char* inertias[] = {"Ixx", "Iyy", "Izz"};

@@ -57,7 +57,9 @@ TEST(RandomDraw, IsAPureFunctionOfTheSeedAndStaysInItsRanges) {
       EXPECT_TRUE(h.get<double>() >= band[0] && h.get<double>() <= band[1]) << h;
     }
     const bool ground = draw.truth_label.find("ground_effect") != std::string::npos;
-    if (ground) EXPECT_TRUE(low) << seed;
+    if (ground) {
+      EXPECT_TRUE(low) << seed;
+    }
     // The reported trim difference is the truth's, at the first waypoint.
     const Scenario& flight = draw.scenarios.front();
     const Vehicle truth = MakeTruthVehicle(spec.config, flight);

@@ -109,7 +109,8 @@ TEST(Shortlist, TheMostSignificantIsRefittedWhenNothingElseIs) {
 // Seed 9573 of discover_controllers.yaml (a stabilizer bar, flight only, low
 // flight): the declared fit pressed Ixx, Iyy to their upper bound (distorting
 // p, q, r) and sigma0 to 0 (ax, ay, az, u, v, w), and predicted p, q no better
-// than their mean. Its round-1 shares rank the bar sixth; with p, q lost,
+// than their mean. Its round-1 shares and p-values (the channels written
+// short) rank the bar sixth; with p, q lost,
 // every candidate acting on them is refitted beyond the slots; one acting
 // only on channels the fit still predicts (ground_effect on az, w) is not.
 TEST(Shortlist, EveryCandidateOnAChannelTheFitHasLostIsRefitted) {
