@@ -17,6 +17,7 @@
 
 #include "core/atomic_file.h"
 #include "core/errors.h"
+#include "core/report_values.h"
 
 namespace coaxid {
 namespace {
@@ -295,9 +296,7 @@ class Parser {
       const auto& loads = BalanceLoadColumns();
       if (std::none_of(loads.begin(), loads.end(),
                        [&](const std::string& name) { return log_.Has(name); })) {
-        std::string names;
-        for (const std::string& name : loads) names += (names.empty() ? "" : ", ") + name;
-        Fail(source_, line, "", "balance log has no load column (needs one of " + names + ")");
+        Fail(source_, line, "", "balance log has no load column (needs one of " + Joined(loads) + ")");
       }
     }
     required_.assign(log_.columns.size(), false);

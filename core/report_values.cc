@@ -14,6 +14,12 @@ double JsonNumber(const nlohmann::json& object, const std::string& key) {
   return object[key].get<double>();
 }
 
+std::string Joined(const std::vector<std::string>& parts, const char* separator) {
+  std::string out;
+  for (const std::string& p : parts) out += (out.empty() ? "" : separator) + p;
+  return out;
+}
+
 std::string NumberText(double v, const char* format) {
   if (!std::isfinite(v)) return "-";
   char text[64];

@@ -5,12 +5,16 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 namespace coaxid {
 
 // object[key] as a number; NaN when object is not an object, lacks key, or
 // holds something else there.
 double JsonNumber(const nlohmann::json& object, const std::string& key);
+
+// The parts one after another, `separator` between them ("a, b, c").
+std::string Joined(const std::vector<std::string>& parts, const char* separator = ", ");
 
 // v printed with the printf format; "-" when v is NaN or infinite.
 std::string NumberText(double v, const char* format = "%.4g");

@@ -8,6 +8,7 @@
 #include <Eigen/QR>
 #include <glog/logging.h>
 
+#include "core/report_values.h"
 #include "dynamics/model_jacobian.h"
 #include "dynamics/outputs.h"
 
@@ -17,12 +18,6 @@ namespace {
 // The invariance is exact algebra (moments and inertias scale together), so
 // its residual is at round-off level; anything above this is a real change.
 constexpr double kInvarianceTolerance = 1e-9;
-
-std::string Join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
 
 // A balance log fixes the scale if it measures a moment (eqs. 61-63).
 bool MeasuresAMoment(const EstimationLog& log) {
@@ -143,20 +138,20 @@ ScaleGauge FixScaleGauge(const VehicleModel& model, const std::vector<Estimation
       with_prior.push_back(p.name);
     }
   }
-  const std::string group_note = "Flight logs determine only ratios of " + Join(gauge.group) +
+  const std::string group_note = "Flight logs determine only ratios of " + Joined(gauge.group) +
                                  " (scaling them together leaves every flight output unchanged; "
                                  "model.md decision 8).";
   if (balance_moment) {
     gauge.fixed_by = "balance log";
     gauge.note = group_note + " A balance log in the fit measures the moments and fixes the scale.";
   } else if (!held_by_config.empty()) {
-    gauge.fixed_by = "config: " + Join(held_by_config) + " held";
+    gauge.fixed_by = "config: " + Joined(held_by_config) + " held";
     if (held_by_config.size() == 1) gauge.held_member = held_by_config[0];
-    gauge.note = group_note + " The scale is fixed by " + Join(held_by_config) +
+    gauge.note = group_note + " The scale is fixed by " + Joined(held_by_config) +
                  " (estimated: false in the config).";
   } else if (!with_prior.empty()) {
-    gauge.fixed_by = "prior on " + Join(with_prior);
-    gauge.note = group_note + " The scale is fixed by the prior on " + Join(with_prior) +
+    gauge.fixed_by = "prior on " + Joined(with_prior);
+    gauge.note = group_note + " The scale is fixed by the prior on " + Joined(with_prior) +
                  "; its std propagates into the other members.";
   } else if (anchor == ScaleAnchor::kHubDistance) {
     const char* d = BaseParameterName(kHubDistance);

@@ -13,6 +13,7 @@
 #include "core/log.h"
 #include "core/plot.h"
 #include "core/report.h"
+#include "core/report_values.h"
 #include "core/stopwatch.h"
 #include "core/vehicle_config.h"
 #include "experiments/cli/cli.h"
@@ -31,12 +32,6 @@ using Clock = std::chrono::steady_clock;
 constexpr const char* kCompareUsage =
     "usage: coaxid compare --logs=A.csv[,B.csv...] --config=F --out=DIR [--validate=C.csv,...] "
     "[--holdout_fraction=0.2] [--truth=T.json] [--prior=R.json[:name,...]]";
-
-std::string Join(const std::vector<std::string>& parts) {
-  std::string out;
-  for (const std::string& p : parts) out += (out.empty() ? "" : ",") + p;
-  return out;
-}
 
 // The paths of the given logs, balance and flight apart. Reads (and so
 // checks) every log.
@@ -146,8 +141,8 @@ json Compare(const CompareRequest& request) {
                    run.method.c_str(), run.logs.size(), SecondsSince(start));
       IdentifyRun identify;
       identify.method = run.method;
-      identify.logs = Join(run.logs);
-      identify.validate = Join(run.validate);
+      identify.logs = Joined(run.logs, ",");
+      identify.validate = Joined(run.validate, ",");
       identify.config = request.config;
       identify.out = (staging / run.method).string();
       identify.holdout_fraction = request.holdout_fraction;

@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "core/report_values.h"
 #include "experiments/studies/summary.h"
 
 namespace coaxid {
@@ -43,10 +44,7 @@ struct Rates {
 };
 
 std::string Join(const std::vector<std::string>& names, const char* empty) {
-  if (names.empty()) return empty;
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : "+") + n;
-  return out;
+  return names.empty() ? empty : Joined(names, "+");
 }
 
 std::string Percent(const nlohmann::json& rate) {

@@ -259,9 +259,7 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
       Shortlist(*scores, symptom_channels, excluded, o.max_refits, o.min_share_of_excess,
                 o.alpha, lost);
   if (!lost.empty()) {
-    std::string names;
-    for (const std::string& c : lost) names += (names.empty() ? "" : ", ") + c;
-    Say(o, "  the fit at the bounds predicts " + names +
+    Say(o, "  the fit at the bounds predicts " + Joined(lost) +
                " no better than their mean: every candidate acting there is refitted");
   }
   for (int k : shortlist) {
