@@ -34,6 +34,9 @@ DEFINE_string(job, "", "study: run one exported job (--out/jobs/job_K.yaml)");
 DEFINE_string(run, "",
               "study: look into one run (its key, e.g. p0_s12): write its simulated logs and "
               "its record to --out, the methods' progress on stderr; the study folder is untouched");
+DEFINE_bool(logs_only, false,
+            "study: with --run, only simulate and write the run's logs (and its draw in run.json); "
+            "run no method");
 
 namespace coaxid {
 namespace {
@@ -45,7 +48,7 @@ constexpr const char* kStudyUsage =
     "       coaxid study --spec=FILE --out=DIR --export=N\n"
     "       coaxid study --job=DIR/jobs/job_K.yaml [--jobs=N]\n"
     "       coaxid study --merge --out=DIR\n"
-    "       coaxid study --spec=FILE --run=KEY --out=DIR";
+    "       coaxid study --spec=FILE --run=KEY --out=DIR [--logs_only]";
 
 std::string Absolute(const std::string& path) {
   return fs::absolute(path).lexically_normal().string();
@@ -278,6 +281,7 @@ int OneRun() {
   fs::create_directories(FLAGS_out);
   StudyRunDetail detail;
   detail.logs_dir = FLAGS_out;
+  detail.logs_only = FLAGS_logs_only;
   detail.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
   const nlohmann::json record = RunStudyRun(spec, RunIdAt(spec, index), detail);
   WriteJson(FLAGS_out + "/run.json", record);
@@ -294,6 +298,7 @@ int RunStudy() {
   RequireFlag(FLAGS_out, "out", kStudyUsage);
   if (FLAGS_export < 0) throw InputError("--export must be a number of jobs >= 1");
   if (FLAGS_export > 0) return Export();
+  if (FLAGS_logs_only && FLAGS_run.empty()) throw InputError("--logs_only needs --run=KEY");
   if (!FLAGS_run.empty()) return OneRun();
   const MpiWorld world = StartMpiIfLaunched();
   if (world.active) {

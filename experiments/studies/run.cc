@@ -244,6 +244,10 @@ nlohmann::json RunStudyRun(const StudySpec& spec, const StudyRunId& id,
     return record;
   }
   record["simulation"] = "ok";
+  if (detail.logs_only) {
+    record["methods"] = nlohmann::json::object();
+    return record;
+  }
   const Vehicle start = StartVehicle(spec, id.point, id.seed);
   nlohmann::json methods = nlohmann::json::object();
   for (StudyMethod m : spec.methods) {

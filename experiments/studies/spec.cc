@@ -130,7 +130,7 @@ StudyRandomisation ParseRandomisation(const YAML::Node& node, const std::string&
   if (!node) return r;
   r.enabled = true;
   CheckKeys(node,
-            {"truth_offset", "truths", "effects", "effect_strength", "outside_strength",
+            {"truth_offset", "rigid_body_inertias", "truths", "effects", "effect_strength", "outside_strength",
              "excitation", "swashplate_rms_rad", "omega_difference_rad_s",
              "gyroscopic_omega_difference_rad_s", "duration_s", "hover_height_m", "low_height_m",
              "low_share", "balance_share", "held_out_s", "controller_gain_factor",
@@ -149,6 +149,9 @@ StudyRandomisation ParseRandomisation(const YAML::Node& node, const std::string&
     if (node[key]) *out = ReadRange(node[key], where + "." + key, min);
   };
   range("truth_offset", &r.truth_offset, 0);
+  if (node["rigid_body_inertias"]) {
+    r.rigid_body_inertias = ReadBool(node["rigid_body_inertias"], where + ".rigid_body_inertias");
+  }
   range("effect_strength", &r.effect_strength, 0);
   range("swashplate_rms_rad", &r.swashplate_rms_rad, 0);
   range("omega_difference_rad_s", &r.omega_difference_rad_s, 0);

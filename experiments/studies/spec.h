@@ -51,6 +51,11 @@ struct StudySweep {
 struct StudyRandomisation {
   bool enabled = false;
   std::array<double, 2> truth_offset{0.10, 0.30};  // |truth / config - 1| per free parameter, random sign
+  // Ixx, Iyy, Izz drawn again (from a stream of their own) until they obey
+  // the triangle inequality of principal moments, as a rigid body's do.
+  // false: each as drawn, what the studies drew before 2026-12-01 (replays of
+  // the seeds judged then).
+  bool rigid_body_inertias = true;
   // Relative weights of the truth classes: no effect, one library effect,
   // two, one load outside the library (experiments/simulation/outside_library_loads.h).
   std::map<std::string, double> truth_weights{

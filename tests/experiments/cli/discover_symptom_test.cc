@@ -27,8 +27,11 @@ namespace {
 using DiscoverSymptomCli = CliTestDir;
 
 TEST_F(DiscoverSymptomCli, AnInertiaFarAboveItsPhysicalRangeIsRestartedAndTheBarFound) {
-  const StudySpec spec =
+  StudySpec spec =
       LoadStudySpec(std::string(COAXID_SOURCE_DIR) + "/configs/studies/discover_confusion.yaml");
+  // The truth as drawn then: its Ixx, Iyy, Izz break the triangle inequality
+  // (rigid-body draws give this seed other inertias since 2026-12-01).
+  spec.randomise.rigid_body_inertias = false;
   const RandomDraw draw = DrawRun(spec, 9419);
   ASSERT_EQ(draw.truth_label, "stabilizer_bar");
   ASSERT_EQ(draw.scenarios.size(), 2u);  // the flight, then the balance

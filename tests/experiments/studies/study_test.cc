@@ -399,6 +399,35 @@ TEST(StudyHeldScale, FlightOnlyScaleMembersAreJudgedOnTheHeldScale) {
 }
 
 // The band against the binomial law summed directly.
+// `--run=KEY --logs_only`: the run's drawn logs and its draw, no method run
+// (bench/discover_speed.sh times `coaxid discover` on them); without --run
+// the flag is refused.
+TEST(StudyOneRun, LogsOnlyWritesTheDrawnLogsAndRunsNoMethod) {
+  const std::string spec = WriteSpec(
+      "logs_only", "study: logs_only\nconfig: " + kSource + "/configs/glmav.yaml\n" +
+                       "scenarios: [" + kSource + "/configs/scenarios/flight.yaml]\n" +
+                       "methods: [discover]\nseeds: {count: 4, base: 20100}\n"
+                       "randomise: {duration_s: [6, 8], held_out_s: 5}\n");
+  const std::string dir = TempDir("logs_only");
+  RunResult r = RunCoaxid("study --spec=" + spec + " --run=p0_s2 --out=" + dir + " --logs_only");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json record = nlohmann::json::parse(ReadFile(dir + "/run.json"));
+  EXPECT_EQ(record["simulation"], "ok");
+  EXPECT_EQ(record["methods"], nlohmann::json::object());
+  EXPECT_EQ(record["seed"], 20102);
+  // The flight as drawn: its duration at the scenario's 200 Hz.
+  std::istringstream flight(ReadFile(dir + "/flight_0.csv"));
+  int rows = -1;  // the header
+  for (std::string line; std::getline(flight, line);) rows += !line.empty() && line[0] != '#';
+  EXPECT_NEAR(rows, 200 * record["draw"]["flight"]["duration_s"].get<double>(), 2);
+  EXPECT_TRUE(fs::exists(dir + "/held_out_flight.csv"));
+  EXPECT_FALSE(fs::exists(dir + "/discover"));
+
+  r = RunCoaxid("study --spec=" + spec + " --out=" + TempDir("logs_only_all") + " --logs_only");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_TRUE(Contains(r.output, "--logs_only needs --run=KEY")) << r.output;
+}
+
 TEST(StudySummary, BinomialBandIsTheTightestCentralRange) {
   for (int n : {1, 5, 20, 100, 1000}) {
     const auto [lo, hi] = BinomialBand(n, 0.95);

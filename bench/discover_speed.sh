@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# discover's wall time on flight-only logs it was never tuned on (issue 13,
+# target: <= 20 s on a 60 s flight-only log with the whole library), measured
+# the way a user runs it: `coaxid discover` on one flight log and its held-out
+# flight, every core, the shipped config. The logs are the flight-only runs of
+# a randomised study spec (`coaxid study --run=KEY --logs_only`): each seed
+# draws its own truth vehicle, truth effects, controller and flight; runs with
+# a balance log are skipped. Prints one line per log (seed, duration, truth,
+# wall time, what was added) and a summary (median, p90, largest, how many
+# within 20 s); outputs go to $COAXID_SPEED_DIR (default /tmp/coaxid-speed),
+# logs are reused by later runs.
+#
+#   bench/discover_speed.sh [SPEC] [BASE_SEED] [COUNT]
+#   bench/discover_speed.sh configs/studies/discover_confusion.yaml 20000 40
+#
+# Use seeds no study has judged (docs/discover_confusion.md lists them). Run on
+# an idle machine: the numbers are wall times.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+coaxid="${COAXID_BINARY:-$root/build/coaxid}"
+spec="${1:-$root/configs/studies/discover_confusion.yaml}"
+base="${2:-20000}"
+count="${3:-40}"
+dir="${COAXID_SPEED_DIR:-/tmp/coaxid-speed}"
+[[ -x "$coaxid" ]] || { echo "discover_speed.sh: no $coaxid: run scripts/build.sh first" >&2; exit 1; }
+[[ -f "$spec" ]] || { echo "discover_speed.sh: no spec $spec" >&2; exit 1; }
+mkdir -p "$dir"
+spec_dir="$(cd "$(dirname "$spec")" && pwd)"
+name="$(basename "$spec" .yaml)_${base}_${count}"
+# The spec with its seeds replaced, beside the original (its paths are relative).
+copy="$spec_dir/.speed_${name}.yaml"
+trap 'rm -f "$copy"' EXIT
+sed "s/^seeds: .*/seeds: {count: $count, base: $base}/" "$spec" > "$copy"
+
+times=()
+within=0
+echo "| seed | flight [s] | truth | wall [s] | added |"
+echo "|---|---|---|---|---|"
+for ((k = 0; k < count; ++k)); do
+  run="$dir/$name/p0_s$k"
+  mkdir -p "$run"
+  if [[ ! -s "$run/run.json" ]]; then
+    "$coaxid" study --spec="$copy" --run="p0_s$k" --out="$run" --logs_only 2> "$run.sim.log" \
+      || { echo "discover_speed.sh: seed $((base + k)): simulation failed ($run.sim.log)" >&2; continue; }
+  fi
+  [[ -f "$run/balance_0.csv" ]] && continue
+  grep -q '"simulation": "ok"' "$run/run.json" || continue
+  out="$run/discover"
+  start=$(date +%s.%N)
+  if ! "$coaxid" discover --logs="$run/flight_0.csv" --validate="$run/held_out_flight.csv" \
+      --config="$root/configs/glmav.yaml" --noise_relaxations=1 --out="$out" \
+      > "$run.discover.out" 2> "$run.discover.log"; then
+    echo "| $((base + k)) | | | failed ($run.discover.log) | |"
+    continue
+  fi
+  wall=$(echo "$(date +%s.%N) - $start" | bc)
+  times+=("$wall")
+  if (($(echo "$wall <= 20" | bc))); then within=$((within + 1)); fi
+  truth=$(python3 -c "import json,sys; d=json.load(open(sys.argv[1]))['draw']; print(d['truth'] + ', ' + d['flight']['band'])" "$run/run.json")
+  rows=$(grep -vc '^#' "$run/flight_0.csv")
+  added=$(python3 -c "import json,sys; print(' + '.join(json.load(open(sys.argv[1]))['added']) or 'nothing')" "$out/discovery.json")
+  printf '| %d | %.0f | %s | %.1f | %s |\n' "$((base + k))" "$(echo "($rows - 2) / 200" | bc -l)" "$truth" "$wall" "$added"
+done
+n=${#times[@]}
+((n > 0)) || { echo "discover_speed.sh: no flight-only log among the seeds" >&2; exit 1; }
+sorted=($(printf '%s\n' "${times[@]}" | sort -g))
+sum=$(printf '%s\n' "${times[@]}" | paste -sd+ | bc)
+median=${sorted[$(((n - 1) / 2))]}
+p90=${sorted[$(((n * 9 + 9) / 10 - 1))]}
+echo
+printf 'flight-only logs: %d; wall time summed %.0f s, median %.1f s, p90 %.1f s, largest %.1f s; within 20 s: %d of %d\n' \
+  "$n" "$sum" "$median" "$p90" "${sorted[$((n - 1))]}" "$within" "$n"
