@@ -33,6 +33,7 @@ trap 'rm -f "$copy"' EXIT
 sed "s/^seeds: .*/seeds: {count: $count, base: $base}/" "$spec" > "$copy"
 
 times=()
+outs=()
 within=0
 echo "| seed | flight [s] | truth | wall [s] | added |"
 echo "|---|---|---|---|---|"
@@ -55,6 +56,7 @@ for ((k = 0; k < count; ++k)); do
   fi
   wall=$(echo "$(date +%s.%N) - $start" | bc)
   times+=("$wall")
+  outs+=("$out/discovery.json")
   if (($(echo "$wall <= 20" | bc))); then within=$((within + 1)); fi
   truth=$(python3 -c "import json,sys; d=json.load(open(sys.argv[1]))['draw']; print(d['truth'] + ', ' + d['flight']['band'])" "$run/run.json")
   rows=$(grep -vc '^#' "$run/flight_0.csv")
@@ -70,3 +72,22 @@ p90=${sorted[$(((n * 9 + 9) / 10 - 1))]}
 echo
 printf 'flight-only logs: %d; wall time summed %.0f s, median %.1f s, p90 %.1f s, largest %.1f s; within 20 s: %d of %d\n' \
   "$n" "$sum" "$median" "$p90" "${sorted[$((n - 1))]}" "$within" "$n"
+# Where the time went: discover's own seconds by step (discovery.json
+# `seconds_by_step`), summed over the logs, and over the logs beyond 20 s.
+python3 - "${outs[@]}" <<'PY'
+import json, sys
+steps, slow, total, slow_total = {}, {}, 0.0, 0.0
+for path in sys.argv[1:]:
+    d = json.load(open(path))
+    total += d["seconds"]
+    is_slow = d["seconds"] > 20
+    slow_total += d["seconds"] if is_slow else 0
+    for s in d["seconds_by_step"]:
+        steps[s["step"]] = steps.get(s["step"], 0) + s["seconds"]
+        if is_slow: slow[s["step"]] = slow.get(s["step"], 0) + s["seconds"]
+print("\n| step | seconds, all logs | share | seconds, logs beyond 20 s | share |\n|---|---|---|---|---|")
+for step, sec in sorted(steps.items(), key=lambda kv: -kv[1]):
+    s = slow.get(step, 0)
+    print(f"| {step} | {sec:.1f} | {sec / total:.0%} | {s:.1f} | {s / slow_total if slow_total else 0:.0%} |")
+print(f"| in all (discover's own clock) | {total:.1f} | | {slow_total:.1f} | |")
+PY

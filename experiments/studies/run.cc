@@ -192,6 +192,7 @@ nlohmann::json DiscoverRun(const StudySpec& spec, const Vehicle& start, const Ve
           {"unexplained", unexplained},
           {"declared_rms_over_noise", declared_rms_ratio},
           {"seconds", r.seconds},
+          {"seconds_by_step", SecondsByStepJson(r.seconds_by_step)},
           {"parameters", p}};
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <type_traits>
 
 #include "core/errors.h"
 #include "core/report.h"
@@ -302,6 +303,23 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
   return true;
 }
 
+nlohmann::json SecondsByStepJson(const std::vector<std::pair<std::string, double>>& steps) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& [step, seconds] : steps) j.push_back({{"step", step}, {"seconds", seconds}});
+  return j;
+}
+
+void AddStepSeconds(const std::string& step, double seconds,
+                    std::vector<std::pair<std::string, double>>* steps) {
+  for (auto& [name, total] : *steps) {
+    if (name == step) {
+      total += seconds;
+      return;
+    }
+  }
+  steps->emplace_back(step, seconds);
+}
+
 int RestartThatGains(double before, const std::vector<double>& after, double min_gain) {
   if (after.empty()) return -1;
   const int best = static_cast<int>(std::min_element(after.begin(), after.end()) - after.begin());
@@ -329,6 +347,27 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   if (!options.IsValid(&why)) throw InputError("discover options: " + why);
   if (estimation.empty()) throw InputError("discover: no estimation log");
   DiscoveryResult out;
+  // Runs step() and adds its wall time to `name` (DiscoveryResult::seconds_by_step).
+  auto timed = [&out](const char* name, auto&& step) {
+    const auto t0 = DiscoveryClock::now();
+    if constexpr (std::is_void_v<decltype(step())>) {
+      step();
+      AddStepSeconds(name, SecondsSince(t0), &out.seconds_by_step);
+    } else {
+      auto result = step();
+      AddStepSeconds(name, SecondsSince(t0), &out.seconds_by_step);
+      return result;
+    }
+  };
+  constexpr const char* kDeclaredFit = "declared fit";
+  constexpr const char* kContinued = "fits continued past their iteration cap";
+  constexpr const char* kRestarts = "restarts off the bounds";
+  constexpr const char* kSnapshots = "fit and held-out errors, residual tests";
+  constexpr const char* kSensitivities = "candidate sensitivities";
+  constexpr const char* kScores = "candidate scores";
+  constexpr const char* kRefits = "candidate refits";
+  constexpr const char* kJudgedAgain = "added effects judged again";
+  constexpr const char* kUnexplained = "unexplained channels, generic dictionary";
   DiscoveryOptions o = options;
   o.fit.function_tolerance = std::max(o.fit.function_tolerance, o.fit_function_tolerance);
   o.fit.max_iterations = std::min(o.fit.max_iterations, o.fit_max_iterations);
@@ -338,7 +377,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   OutputErrorOptions declared_fit = o.fit;
   out.start = "starting values from the config";
   if (options.ekf_start) {  // not usable without a flight log: the config start
-    const EkfStart ekf = StartFromEkfPass(declared, estimation);
+    const EkfStart ekf = timed("EKF start", [&] { return StartFromEkfPass(declared, estimation); });
     Say(options, "discover: " + ekf.note);
     if (ekf.usable) {
       start_vehicle.parameters = ekf.parameters;
@@ -350,7 +389,8 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   }
   Say(options, "discover: fitting the declared model (" +
                    std::to_string(declared.parameters.FreeIndices().size()) + " free parameters)");
-  OutputErrorResult fit = FitOutputError(start_vehicle, estimation, declared_fit);
+  OutputErrorResult fit =
+      timed(kDeclaredFit, [&] { return FitOutputError(start_vehicle, estimation, declared_fit); });
   if (!fit.usable && fit.scale_move_failed) {
     // The declared model needs a scale member beyond its bounds (e.g. the
     // inertias of a vehicle with an undeclared constant moment): a symptom
@@ -360,17 +400,21 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                      "; refitting with the scale held in the solve (a symptom of a missing effect)");
     o.fit.scale_free_in_solve = false;
     declared_fit.scale_free_in_solve = false;
-    fit = FitOutputError(start_vehicle, estimation, declared_fit);
+    fit = timed(kDeclaredFit, [&] { return FitOutputError(start_vehicle, estimation, declared_fit); });
   }
   if (!fit.usable) throw ComputationError("the declared model's fit failed: " + fit.why_not_usable);
-  fit = Converged(declared, std::move(fit), estimation, o.fit, options);
+  fit = timed(kContinued,
+              [&] { return Converged(declared, std::move(fit), estimation, o.fit, options); });
   std::string restart_note;
-  fit = RestartedOffBounds(declared, declared, std::move(fit), estimation, o.fit, options,
-                           &restart_note);
+  fit = timed(kRestarts, [&] {
+    return RestartedOffBounds(declared, declared, std::move(fit), estimation, o.fit, options,
+                              &restart_note);
+  });
   if (!restart_note.empty()) out.start += "; " + restart_note;
   Vehicle current = declared;
   current.parameters = fit.parameters;
-  out.baseline = Snapshot(current, fit, estimation, validation, options);
+  out.baseline =
+      timed(kSnapshots, [&] { return Snapshot(current, fit, estimation, validation, options); });
   const std::vector<PlausibilityFinding> far =
       FarOutsidePhysicalRange(fit.parameters, declared.parameters);
   const std::vector<std::string> at_bounds = ParametersAtBounds(fit.parameters);
@@ -392,7 +436,8 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     out.symptoms.push_back(b);
   }
 
-  CandidatePass pass = LinearisePass(current, fit, estimation, o.fit);
+  CandidatePass pass =
+      timed(kSensitivities, [&] { return LinearisePass(current, fit, estimation, o.fit); });
   ModelSnapshot now = out.baseline;
   Say(options, "discover: sensitivities of " + std::to_string(pass.candidates.size()) +
                    " candidate effects along the fit: " + NumberText(pass.seconds, "%.1f s"));
@@ -402,33 +447,40 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                      (out.added.empty() ? std::string("the declared model")
                                         : "the model with " + std::to_string(out.added.size()) +
                                               " added effect(s)"));
-    std::vector<CandidateScore> scores = ScoreRound(pass, now, estimation, o, round);
+    std::vector<CandidateScore> scores =
+        timed(kScores, [&] { return ScoreRound(pass, now, estimation, o, round); });
     std::vector<CandidateScore> beside;  // a paired refit's, reported after the round's
     bool accepted = false;
     if (static_cast<int>(out.added.size()) < options.max_added) {
       const std::vector<std::string> removed = ExcludedEffects(out.removed, last_change_round);
-      RoundRefits refits = RefitShortlisted(pass, now, declared, removed, estimation, validation,
-                                            &scores, o, start);
+      RoundRefits refits = timed(kRefits, [&] {
+        return RefitShortlisted(pass, now, declared, removed, estimation, validation, &scores, o,
+                                start);
+      });
       // The model with a refit: continued if it stopped at its cap, and
       // restarted off the bounds it leaves.
       auto adopt = [&](CandidateRefit&& refit) {
         pass = std::move(refit.next);
         now = std::move(refit.snapshot);
         if (pass.fit.hit_iteration_limit) {
-          const OutputErrorResult fit = Converged(pass.fitted, pass.fit, estimation, o.fit, options);
+          const OutputErrorResult fit = timed(
+              kContinued, [&] { return Converged(pass.fitted, pass.fit, estimation, o.fit, options); });
           Vehicle v = pass.fitted;
           v.parameters = fit.parameters;
-          pass = LinearisePass(v, fit, estimation, o.fit);
-          now = Snapshot(v, fit, estimation, validation, options);
+          pass = timed(kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
+          now = timed(kSnapshots, [&] { return Snapshot(v, fit, estimation, validation, options); });
         }
         std::string restart_note;
-        OutputErrorResult restarted = RestartedOffBounds(pass.fitted, declared, pass.fit, estimation,
-                                                         o.fit, options, &restart_note);
+        OutputErrorResult restarted = timed(kRestarts, [&] {
+          return RestartedOffBounds(pass.fitted, declared, pass.fit, estimation, o.fit, options,
+                                    &restart_note);
+        });
         if (!restart_note.empty()) {
           Vehicle v = pass.fitted;
           v.parameters = restarted.parameters;
-          pass = LinearisePass(v, restarted, estimation, o.fit);
-          now = Snapshot(v, restarted, estimation, validation, options);
+          pass = timed(kSensitivities, [&] { return LinearisePass(v, restarted, estimation, o.fit); });
+          now = timed(kSnapshots,
+                      [&] { return Snapshot(v, restarted, estimation, validation, options); });
         }
       };
       const int best = refits.choice.added;
@@ -441,8 +493,10 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         out.added.push_back(s.effect);
         accepted = true;
       } else if (static_cast<int>(out.added.size()) + 2 <= options.max_added) {
-        PairedRefit pair = RefitBesideABound(pass, now, refits, &scores, declared, removed,
-                                             estimation, validation, o, round, start);
+        PairedRefit pair = timed(kRefits, [&] {
+          return RefitBesideABound(pass, now, refits, &scores, declared, removed, estimation,
+                                   validation, o, round, start);
+        });
         beside = std::move(pair.beside);
         if (pair.added || pair.second_alone) {
           adopt(std::move(pair.joint));
@@ -460,9 +514,11 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         // 0.2 % of wind's channels' excess and without cg_offset 0.0 %;
         // cg_offset was taken out and wind, judged once, stayed).
         const std::string latest = out.added.back();
-        while (DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out) &&
-               std::find(out.added.begin(), out.added.end(), latest) != out.added.end()) {
-        }
+        timed(kJudgedAgain, [&] {
+          while (DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out) &&
+                 std::find(out.added.begin(), out.added.end(), latest) != out.added.end()) {
+          }
+        });
         if (std::find(out.added.begin(), out.added.end(), latest) != out.added.end()) {
           last_change_round = round;
         }
@@ -517,11 +573,18 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                   t.ljung_box_p, t.mean, t.rms, t.noise_std > 0 ? t.rms / t.noise_std : INFINITY,
                   t.noise_std, u.correlates_with.c_str(), u.correlation);
     u.why = text;
-    u.generic = SearchChannelDictionary(estimation, out.final.result.predictions, t.channel,
-                                        options.dictionary);
+    u.generic = timed(kUnexplained, [&] {
+      return SearchChannelDictionary(estimation, out.final.result.predictions, t.channel,
+                                     options.dictionary);
+    });
     out.unexplained.push_back(u);
   }
   out.seconds = SecondsSince(start);
+  std::vector<std::string> steps;
+  for (const auto& [step, seconds] : out.seconds_by_step) {
+    steps.push_back(step + " " + NumberText(seconds, "%.1f s"));
+  }
+  Say(options, "discover: " + NumberText(out.seconds, "%.1f s") + " in all: " + Joined(steps, ", "));
   return out;
 }
 
@@ -619,7 +682,8 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
             {"ljung_box_lags", options.residuals.lags},
             {"unexplained_rms_ratio", options.unexplained_rms_ratio},
             {"prediction_window_s", options.window_s}}},
-          {"seconds", r.seconds}};
+          {"seconds", r.seconds},
+          {"seconds_by_step", SecondsByStepJson(r.seconds_by_step)}};
 }
 
 }  // namespace coaxid

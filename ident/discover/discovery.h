@@ -22,6 +22,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -162,7 +163,19 @@ struct DiscoveryResult {
   std::vector<RemovedEffect> removed;
   std::vector<UnexplainedChannel> unexplained;
   double seconds = 0;
+  // Wall time by step of the loop [s], summed over the rounds, in the order
+  // each step was first taken (StepSeconds); with `seconds`, where a slow
+  // run spends its time.
+  std::vector<std::pair<std::string, double>> seconds_by_step;
 };
+
+// Adds `seconds` to `step` in `steps`, appending a step not yet there.
+void AddStepSeconds(const std::string& step, double seconds,
+                    std::vector<std::pair<std::string, double>>* steps);
+
+// [{"step": ..., "seconds": ...}, ...] in that order (discovery.json and the
+// study records' `seconds_by_step`).
+nlohmann::json SecondsByStepJson(const std::vector<std::pair<std::string, double>>& steps);
 
 // The removed effects that may not be candidates in the next round: those
 // removed in or after `last_change_round`, the latest round whose addition

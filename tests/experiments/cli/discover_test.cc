@@ -54,6 +54,11 @@ TEST(DiscoverCli, FindsWakeInterferenceInASimulatedBalanceLog) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
   EXPECT_TRUE(j["baseline"].contains("validation"));  // the held-out final part
+  ASSERT_TRUE(j["seconds_by_step"].is_array());
+  EXPECT_EQ(j["seconds_by_step"][0]["step"], "EKF start");  // tried first: no flight log here
+  double summed = 0;
+  for (const nlohmann::json& step : j["seconds_by_step"]) summed += step["seconds"].get<double>();
+  EXPECT_LE(summed, j["seconds"].get<double>());
   EXPECT_LT(j["final"]["validation"]["N"]["nrmse"].get<double>(),
             0.5 * j["baseline"]["validation"]["N"]["nrmse"].get<double>());
   EXPECT_TRUE(fs::exists(dir / "out" / "report.md"));

@@ -115,7 +115,9 @@ TEST(RandomDraw, TruthInertiasObeyTheTriangleInequalityAndNothingElseMoves) {
     for (const char* name : {"Ixx", "Iyy", "Izz"}) {
       rest_a["truth_parameters"].erase(name);
       rest_b["truth_parameters"].erase(name);
-      if (obeyed) EXPECT_EQ(inertia(a, name), inertia(b, name)) << name << " seed " << seed;
+      if (obeyed) {
+        EXPECT_EQ(inertia(a, name), inertia(b, name)) << name << " seed " << seed;
+      }
     }
     // The hover trim that sets gamma2 for the drawn |omega1 - omega2| is a
     // Newton solve of the whole model: other inertias move its last digits.

@@ -111,7 +111,9 @@ TEST(SymptomaticParameters, AtABoundOrFarOutsideThePhysicalRange) {
   const std::vector<PlausibilityFinding> far = FarOutsidePhysicalRange(fit, config);
   ASSERT_EQ(far.size(), 3u);  // Ixx, Iyy, Cy; Iyy < 2 (Ixx + Izz): the triangle is no symptom
   for (const PlausibilityFinding& f : far) {
-    if (f.subject == "Ixx") EXPECT_NEAR(f.upper, most, 1e-12);
+    if (f.subject == "Ixx") {
+      EXPECT_NEAR(f.upper, most, 1e-12);
+    }
   }
   // Restarts start every one of them at its config value.
   const std::map<std::string, double> restarts = ConfigValuesOfSymptomaticParameters(fit, declared);
@@ -145,7 +147,9 @@ TEST(SymptomaticParameters, InertiasFarFromTheTriangleInequality) {
       EXPECT_NEAR(f.lower, 0.0203672 - 2.89585e-6, 1e-12);
       EXPECT_NEAR(f.upper, 0.0203672 + 2.89585e-6, 1e-12);
     }
-    if (f.subject == "Izz") EXPECT_NEAR(f.lower, 0.0203672 - 0.000253008, 1e-12);
+    if (f.subject == "Izz") {
+      EXPECT_NEAR(f.lower, 0.0203672 - 0.000253008, 1e-12);
+    }
   }
   // A truth the study drew (controllers, seed 9500): Ixx 1.4 x Iyy + Izz.
   fit.SetValue("Ixx", 0.00236021);

@@ -5,6 +5,7 @@
 // reported as unexplained. Plus the p-value functions against closed forms.
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
@@ -91,6 +92,21 @@ TEST(Discover, FindsWakeInterferenceAndOnlyIt) {
   ExpectWithinThreeStd(r, truth, "wake_interference.k_T");
   ExpectWithinThreeStd(r, truth, "wake_interference.k_Q");
   EXPECT_TRUE(r.unexplained.empty());
+  // Where the time went: the steps taken, each once, account for the loop's
+  // wall time (the rest is bookkeeping between them).
+  std::map<std::string, double> steps;
+  double summed = 0;
+  for (const auto& [step, seconds] : r.seconds_by_step) {
+    EXPECT_TRUE(steps.emplace(step, seconds).second) << step << " listed twice";
+    EXPECT_GE(seconds, 0) << step;
+    summed += seconds;
+  }
+  for (const char* step : {"declared fit", "candidate sensitivities", "candidate scores",
+                           "candidate refits", "added effects judged again"}) {
+    EXPECT_EQ(steps.count(step), 1u) << step;
+  }
+  EXPECT_LE(summed, r.seconds);
+  EXPECT_GE(summed, 0.7 * r.seconds) << r.seconds;
 }
 
 TEST(Discover, FindsCgOffset) {
