@@ -580,11 +580,11 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     out.unexplained.push_back(u);
   }
   out.seconds = SecondsSince(start);
-  std::vector<std::string> steps;
+  std::vector<std::string> steps;  // those that round to 0.1 s or more
   for (const auto& [step, seconds] : out.seconds_by_step) {
-    steps.push_back(step + " " + NumberText(seconds, "%.1f s"));
+    if (seconds >= 0.05) steps.push_back(step + " " + NumberText(seconds, "%.1f s"));
   }
-  Say(options, "discover: " + NumberText(out.seconds, "%.1f s") + " in all: " + Joined(steps, ", "));
+  if (!steps.empty()) Say(options, "discover: time by step: " + Joined(steps, ", "));
   return out;
 }
 
