@@ -193,8 +193,9 @@ RandomDraw DrawRun(const StudySpec& spec, uint64_t seed) {
   for (int attempt = 0; r.rigid_body_inertias && !ObeysTriangleInequality(truth.truth_parameters);
        ++attempt) {
     if (attempt == 1000) {
-      throw InputError("randomise: no draw of Ixx, Iyy, Izz within truth_offset of the config "
-                       "obeys the triangle inequality");
+      throw InputError(
+          "randomise: no draw of Ixx, Iyy, Izz within truth_offset of the config "
+          "obeys the triangle inequality");
     }
     Rng inertia_stream(MixSeed(seed, 3000 + attempt));
     for (const char* name : {"Ixx", "Iyy", "Izz"}) {

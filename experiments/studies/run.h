@@ -30,7 +30,7 @@ namespace coaxid {
 struct StudyRunDetail {
   std::string logs_dir;                                // empty: no logs written
   std::function<void(const std::string&)> progress;  // nullptr: silent
-  bool logs_only = false;  // simulate and write the logs, run no method
+  bool logs_only = false;                            // simulate and write the logs, run no method
 };
 
 nlohmann::json RunStudyRun(const StudySpec& spec, const StudyRunId& id,

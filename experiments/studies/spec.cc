@@ -129,13 +129,13 @@ StudyRandomisation ParseRandomisation(const YAML::Node& node, const std::string&
   StudyRandomisation r;
   if (!node) return r;
   r.enabled = true;
-  CheckKeys(node,
-            {"truth_offset", "rigid_body_inertias", "truths", "effects", "effect_strength", "outside_strength",
-             "excitation", "swashplate_rms_rad", "omega_difference_rad_s",
-             "gyroscopic_omega_difference_rad_s", "duration_s", "hover_height_m", "low_height_m",
-             "low_share", "balance_share", "held_out_s", "controller_gain_factor",
-             "sensor_noise_factor"},
-            where);
+  CheckKeys(
+      node,
+      {"truth_offset", "rigid_body_inertias", "truths", "effects", "effect_strength",
+       "outside_strength", "excitation", "swashplate_rms_rad", "omega_difference_rad_s",
+       "gyroscopic_omega_difference_rad_s", "duration_s", "hover_height_m", "low_height_m",
+       "low_share", "balance_share", "held_out_s", "controller_gain_factor", "sensor_noise_factor"},
+      where);
   if (spec.sweep.setting != SweepSetting::kNone) {
     throw InputError(where + ": a randomised study draws its settings per seed and takes no sweep");
   }

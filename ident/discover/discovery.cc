@@ -400,7 +400,8 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                      "; refitting with the scale held in the solve (a symptom of a missing effect)");
     o.fit.scale_free_in_solve = false;
     declared_fit.scale_free_in_solve = false;
-    fit = timed(kDeclaredFit, [&] { return FitOutputError(start_vehicle, estimation, declared_fit); });
+    fit = timed(kDeclaredFit,
+                [&] { return FitOutputError(start_vehicle, estimation, declared_fit); });
   }
   if (!fit.usable) throw ComputationError("the declared model's fit failed: " + fit.why_not_usable);
   fit = timed(kContinued,
@@ -463,12 +464,14 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         pass = std::move(refit.next);
         now = std::move(refit.snapshot);
         if (pass.fit.hit_iteration_limit) {
-          const OutputErrorResult fit = timed(
-              kContinued, [&] { return Converged(pass.fitted, pass.fit, estimation, o.fit, options); });
+          const OutputErrorResult fit = timed(kContinued, [&] {
+            return Converged(pass.fitted, pass.fit, estimation, o.fit, options);
+          });
           Vehicle v = pass.fitted;
           v.parameters = fit.parameters;
           pass = timed(kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
-          now = timed(kSnapshots, [&] { return Snapshot(v, fit, estimation, validation, options); });
+          now =
+              timed(kSnapshots, [&] { return Snapshot(v, fit, estimation, validation, options); });
         }
         std::string restart_note;
         OutputErrorResult restarted = timed(kRestarts, [&] {
@@ -478,7 +481,8 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         if (!restart_note.empty()) {
           Vehicle v = pass.fitted;
           v.parameters = restarted.parameters;
-          pass = timed(kSensitivities, [&] { return LinearisePass(v, restarted, estimation, o.fit); });
+          pass =
+              timed(kSensitivities, [&] { return LinearisePass(v, restarted, estimation, o.fit); });
           now = timed(kSnapshots,
                       [&] { return Snapshot(v, restarted, estimation, validation, options); });
         }

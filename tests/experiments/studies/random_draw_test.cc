@@ -107,7 +107,8 @@ TEST(RandomDraw, TruthInertiasObeyTheTriangleInequalityAndNothingElseMoves) {
       return d["truth_parameters"][name].get<double>();
     };
     const double x = inertia(a, "Ixx"), y = inertia(a, "Iyy"), z = inertia(a, "Izz");
-    EXPECT_TRUE(x <= y + z && y <= x + z && z <= x + y) << seed << ": " << x << " " << y << " " << z;
+    EXPECT_TRUE(x <= y + z && y <= x + z && z <= x + y)
+        << seed << ": " << x << " " << y << " " << z;
     const double bx = inertia(b, "Ixx"), by = inertia(b, "Iyy"), bz = inertia(b, "Izz");
     const bool obeyed = bx <= by + bz && by <= bx + bz && bz <= bx + by;
     if (!obeyed) ++redrawn;

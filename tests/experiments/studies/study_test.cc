@@ -403,11 +403,11 @@ TEST(StudyHeldScale, FlightOnlyScaleMembersAreJudgedOnTheHeldScale) {
 // (bench/discover_speed.sh times `coaxid discover` on them); without --run
 // the flag is refused.
 TEST(StudyOneRun, LogsOnlyWritesTheDrawnLogsAndRunsNoMethod) {
-  const std::string spec = WriteSpec(
-      "logs_only", "study: logs_only\nconfig: " + kSource + "/configs/glmav.yaml\n" +
-                       "scenarios: [" + kSource + "/configs/scenarios/flight.yaml]\n" +
-                       "methods: [discover]\nseeds: {count: 4, base: 20100}\n"
-                       "randomise: {duration_s: [6, 8], held_out_s: 5}\n");
+  const std::string spec =
+      WriteSpec("logs_only", "study: logs_only\nconfig: " + kSource + "/configs/glmav.yaml\n" +
+                                 "scenarios: [" + kSource + "/configs/scenarios/flight.yaml]\n" +
+                                 "methods: [discover]\nseeds: {count: 4, base: 20100}\n"
+                                 "randomise: {duration_s: [6, 8], held_out_s: 5}\n");
   const std::string dir = TempDir("logs_only");
   RunResult r = RunCoaxid("study --spec=" + spec + " --run=p0_s2 --out=" + dir + " --logs_only");
   ASSERT_EQ(r.status, 0) << r.output;
