@@ -126,12 +126,16 @@ TEST(Discover, FindsCgOffset) {
   for (const CandidateScore& c : r.candidates) {
     if (!c.refitted) continue;
     significant += c.significant;
-    if (c.confirmed) EXPECT_TRUE(c.significant) << c.effect;
+    if (c.confirmed) {
+      EXPECT_TRUE(c.significant) << c.effect;
+    }
     if (c.significant && !c.confirmed) {
       EXPECT_EQ(c.why_not_confirmed.rfind("practically insignificant", 0), 0u)
           << c.effect << ": " << c.why_not_confirmed;
     }
-    if (!c.significant) EXPECT_FALSE(c.confirmed) << c.effect;
+    if (!c.significant) {
+      EXPECT_FALSE(c.confirmed) << c.effect;
+    }
   }
   EXPECT_GE(significant, 1);
 }
