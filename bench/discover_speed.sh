@@ -13,8 +13,9 @@
 #   bench/discover_speed.sh [SPEC] [BASE_SEED] [COUNT]
 #   bench/discover_speed.sh configs/studies/discover_confusion.yaml 20000 40
 #
-# Use seeds no study has judged (docs/discover_confusion.md lists them). Run on
-# an idle machine: the numbers are wall times.
+# Use seeds no study has judged or timed (docs/discover_confusion.md lists
+# them; 20000-20059 and 20100-20179 are taken). Run on an idle machine: the
+# numbers are wall times. Needs bc and python3.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 coaxid="${COAXID_BINARY:-$root/build/coaxid}"
@@ -24,6 +25,9 @@ count="${3:-40}"
 dir="${COAXID_SPEED_DIR:-/tmp/coaxid-speed}"
 [[ -x "$coaxid" ]] || { echo "discover_speed.sh: no $coaxid: run scripts/build.sh first" >&2; exit 1; }
 [[ -f "$spec" ]] || { echo "discover_speed.sh: no spec $spec" >&2; exit 1; }
+for tool in bc python3; do
+  command -v "$tool" > /dev/null || { echo "discover_speed.sh: needs $tool (apt-get install $tool)" >&2; exit 1; }
+done
 mkdir -p "$dir"
 spec_dir="$(cd "$(dirname "$spec")" && pwd)"
 name="$(basename "$spec" .yaml)_${base}_${count}"
