@@ -359,6 +359,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
       return result;
     }
   };
+  constexpr const char* kEkfStart = "EKF start";
   constexpr const char* kDeclaredFit = "declared fit";
   constexpr const char* kContinued = "fits continued past their iteration cap";
   constexpr const char* kRestarts = "restarts off the bounds";
@@ -377,7 +378,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   OutputErrorOptions declared_fit = o.fit;
   out.start = "starting values from the config";
   if (options.ekf_start) {  // not usable without a flight log: the config start
-    const EkfStart ekf = timed("EKF start", [&] { return StartFromEkfPass(declared, estimation); });
+    const EkfStart ekf = timed(kEkfStart, [&] { return StartFromEkfPass(declared, estimation); });
     Say(options, "discover: " + ekf.note);
     if (ekf.usable) {
       start_vehicle.parameters = ekf.parameters;

@@ -106,11 +106,12 @@ TEST(RandomDraw, TruthInertiasObeyTheTriangleInequalityAndNothingElseMoves) {
     auto inertia = [](const nlohmann::json& d, const char* name) {
       return d["truth_parameters"][name].get<double>();
     };
-    const double x = inertia(a, "Ixx"), y = inertia(a, "Iyy"), z = inertia(a, "Izz");
-    EXPECT_TRUE(x <= y + z && y <= x + z && z <= x + y)
-        << seed << ": " << x << " " << y << " " << z;
-    const double bx = inertia(b, "Ixx"), by = inertia(b, "Iyy"), bz = inertia(b, "Izz");
-    const bool obeyed = bx <= by + bz && by <= bx + bz && bz <= bx + by;
+    auto obeys_triangle = [&](const nlohmann::json& d) {
+      const double x = inertia(d, "Ixx"), y = inertia(d, "Iyy"), z = inertia(d, "Izz");
+      return x <= y + z && y <= x + z && z <= x + y;
+    };
+    EXPECT_TRUE(obeys_triangle(a)) << seed << ": " << a["truth_parameters"].dump();
+    const bool obeyed = obeys_triangle(b);
     if (!obeyed) ++redrawn;
     nlohmann::json rest_a = a, rest_b = b;
     for (const char* name : {"Ixx", "Iyy", "Izz"}) {

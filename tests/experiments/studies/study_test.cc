@@ -398,7 +398,6 @@ TEST(StudyHeldScale, FlightOnlyScaleMembersAreJudgedOnTheHeldScale) {
   EXPECT_LT(covered_drawn, lo) << "the premise: the drawn d is 10-30 % off the held one";
 }
 
-// The band against the binomial law summed directly.
 // `--run=KEY --logs_only`: the run's drawn logs and its draw, no method run
 // (bench/discover_speed.sh times `coaxid discover` on them); without --run
 // the flag is refused.
@@ -428,6 +427,7 @@ TEST(StudyOneRun, LogsOnlyWritesTheDrawnLogsAndRunsNoMethod) {
   EXPECT_TRUE(Contains(r.output, "--logs_only needs --run=KEY")) << r.output;
 }
 
+// The band against the binomial law summed directly.
 TEST(StudySummary, BinomialBandIsTheTightestCentralRange) {
   for (int n : {1, 5, 20, 100, 1000}) {
     const auto [lo, hi] = BinomialBand(n, 0.95);
