@@ -5,17 +5,32 @@
 
 #include <cmath>
 
+#include "dynamics/sin_cos.h"
 #include "dynamics/state.h"
 
 namespace coaxid {
 
+// The sines and cosines of the ZYX Euler angles (phi, theta, psi), each
+// taken once: the rotation (eq. 1) and the Euler angle rates (eq. 2) share
+// them.
+template <typename T>
+struct EulerSines {
+  T sf, cf, st, ct, sp, cp;
+};
+
+template <typename T>
+EulerSines<T> EulerSinesOf(const T& phi, const T& theta, const T& psi) {
+  EulerSines<T> e;
+  SinCos(phi, &e.sf, &e.cf);
+  SinCos(theta, &e.st, &e.ct);
+  SinCos(psi, &e.sp, &e.cp);
+  return e;
+}
+
 // Rotation body -> earth for ZYX Euler angles (eq. 1).
 template <typename T>
-Mat3<T> BodyToEarth(const T& phi, const T& theta, const T& psi) {
-  using std::cos;
-  using std::sin;
-  const T cf = cos(phi), sf = sin(phi), ct = cos(theta), st = sin(theta), cp = cos(psi),
-          sp = sin(psi);
+Mat3<T> BodyToEarth(const EulerSines<T>& e) {
+  const T &sf = e.sf, &cf = e.cf, &st = e.st, &ct = e.ct, &sp = e.sp, &cp = e.cp;
   Mat3<T> R_EB;
   R_EB << ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp,  //
       ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp,      //
@@ -23,15 +38,19 @@ Mat3<T> BodyToEarth(const T& phi, const T& theta, const T& psi) {
   return R_EB;
 }
 
+template <typename T>
+Mat3<T> BodyToEarth(const T& phi, const T& theta, const T& psi) {
+  return BodyToEarth(EulerSinesOf(phi, theta, psi));
+}
+
 // State derivative of a rigid body of mass m and principal inertias
 // (Ixx, Iyy, Izz) (eq. 5) under the total force F_B (aerodynamic + gravity)
-// and moment M_B in body axes. Euler angles ZYX, x[kTheta] away from +-pi/2.
+// and moment M_B in body axes. Euler angles ZYX, x[kTheta] away from +-pi/2;
+// e their sines and cosines, R_EB = BodyToEarth(e).
 template <typename T>
-void RigidBodyDerivative(const T* x, const Mat3<T>& R_EB, const Vec3<T>& F_B,
-                         const Vec3<T>& M_B, const T& m, const T& Ixx, const T& Iyy,
-                         const T& Izz, T* xdot) {
-  using std::cos;
-  using std::sin;
+void RigidBodyDerivative(const T* x, const EulerSines<T>& e, const Mat3<T>& R_EB,
+                         const Vec3<T>& F_B, const Vec3<T>& M_B, const T& m, const T& Ixx,
+                         const T& Iyy, const T& Izz, T* xdot) {
   const T u = x[kU], v = x[kV], w = x[kW];
   const T p = x[kP], q = x[kQ], r = x[kR];
   // Eqs. 34-36 (eq. 1): position rate in earth axes.
@@ -44,11 +63,9 @@ void RigidBodyDerivative(const T* x, const Mat3<T>& R_EB, const Vec3<T>& F_B,
   xdot[kU] = r * v - q * w + F_B[0] / m;
   xdot[kV] = p * w - r * u + F_B[1] / m;
   xdot[kW] = q * u - p * v + F_B[2] / m;
-  // Eqs. 37-39 (eq. 2): Euler angle rates. From R_EB: sin(phi) cos(theta) =
-  // R(2,1), cos(phi) cos(theta) = R(2,2), sin(theta) = -R(2,0).
-  const T cos_theta = cos(x[kTheta]);
-  const T sf = sin(x[kPhi]), cf = cos(x[kPhi]);
-  const T tan_theta = -R_EB(2, 0) / cos_theta;
+  // Eqs. 37-39 (eq. 2): Euler angle rates.
+  const T &cos_theta = e.ct, &sf = e.sf, &cf = e.cf;
+  const T tan_theta = e.st / cos_theta;
   xdot[kPhi] = p + tan_theta * (sf * q + cf * r);
   xdot[kTheta] = cf * q - sf * r;
   xdot[kPsi] = (sf * q + cf * r) / cos_theta;

@@ -173,8 +173,6 @@ AeroLoads<T> VehicleModel::Loads(const T* theta, const T* input, Setting setting
 template <typename T>
 AeroLoads<T> VehicleModel::LoadsGivenRotation(const T* theta, const T* input, Setting setting,
                                               const T* x, const Mat3<T>& R_EB) const {
-  using std::cos;
-  using std::sin;
   using std::sqrt;
   const T& alpha = theta[kAlpha];
   const T& beta = theta[kBeta];
@@ -188,8 +186,9 @@ AeroLoads<T> VehicleModel::LoadsGivenRotation(const T* theta, const T* input, Se
       decltype(effect)::AdjustInputs(p, &delta_cx, &delta_cy);
     });
   }
-  const T cx = cos(delta_cx), sx = sin(delta_cx);
-  const T cy = cos(delta_cy), sy = sin(delta_cy);
+  T sx, cx, sy, cy;
+  SinCos(delta_cx, &sx, &cx);
+  SinCos(delta_cy, &sy, &cy);
 
   // Interference loss (eq. 12; model.md, decision 1).
   const T sigma = interference_ == InterferenceModel::kTable
@@ -275,12 +274,13 @@ AeroLoads<T> VehicleModel::LoadsGivenRotation(const T* theta, const T* input, Se
 
 template <typename T>
 void VehicleModel::Derivative(const T* theta, const T* x, const T* input, T* xdot) const {
-  const Mat3<T> R_EB = BodyToEarth(x[kPhi], x[kTheta], x[kPsi]);
+  const EulerSines<T> e = EulerSinesOf(x[kPhi], x[kTheta], x[kPsi]);
+  const Mat3<T> R_EB = BodyToEarth(e);
   const AeroLoads<T> loads = LoadsGivenRotation(theta, input, Setting::kFlight, x, R_EB);
   // Weight in body axes, eq. 27: R_EB^T (0, 0, m g); total force eq. 28.
   const T mg = theta[kMass] * theta[kGravity];
   const Vec3<T> F_B = loads.force_B + mg * Vec3<T>(R_EB(2, 0), R_EB(2, 1), R_EB(2, 2));
-  RigidBodyDerivative(x, R_EB, F_B, loads.moment_B, theta[kMass], theta[kIxx], theta[kIyy],
+  RigidBodyDerivative(x, e, R_EB, F_B, loads.moment_B, theta[kMass], theta[kIxx], theta[kIyy],
                       theta[kIzz], xdot);
   if (num_effect_states_ == 0) return;
   ForEachEffectType([&](auto effect, int i) {

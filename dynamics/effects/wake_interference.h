@@ -8,6 +8,7 @@
 
 #include "core/parameters.h"
 #include "dynamics/effects/effect.h"
+#include "dynamics/sin_cos.h"
 
 namespace coaxid {
 
@@ -24,14 +25,13 @@ struct WakeInterferenceEffect : EffectBase {
   }
   template <typename T>
   static void AddLoads(const EffectContext<T>& c, const T* p, AeroLoads<T>* loads) {
-    using std::cos;
-    using std::sin;
     const T w12 = c.omega1 * c.omega2;
     // Unit vector of the lower rotor's thrust direction scaled by beta < 0
     // (eq. 9): n = (-sin dy cos dx, -sin dx, cos dx cos dy) points along T2 / beta,
     // so reducing the magnitude adds +k_T w12 n.
-    const T cx = cos(c.delta_cx), sx = sin(c.delta_cx);
-    const T cy = cos(c.delta_cy), sy = sin(c.delta_cy);
+    T sx, cx, sy, cy;
+    SinCos(c.delta_cx, &sx, &cx);
+    SinCos(c.delta_cy, &sy, &cy);
     const Vec3<T> dT2 = (p[0] * w12) * Vec3<T>(-sy * cx, -sx, cx * cy);
     const T d = c.theta[kHubDistance];
     loads->force_B += dT2;

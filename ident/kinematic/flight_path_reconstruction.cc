@@ -46,12 +46,13 @@ void KinematicDerivative(const T* z, const T* rates, const T* specific_force, co
   T x[kNumStates];
   for (int i = 0; i < kNumKinematicStates; ++i) x[i] = z[i];
   for (int i = 0; i < 3; ++i) x[kP + i] = rates[i];
-  const Mat3<T> R_EB = BodyToEarth(x[kPhi], x[kTheta], x[kPsi]);
+  const EulerSines<T> e = EulerSinesOf(x[kPhi], x[kTheta], x[kPsi]);
+  const Mat3<T> R_EB = BodyToEarth(e);
   const Vec3<T> f = Vec3<T>(specific_force[0], specific_force[1], specific_force[2]) +
                     R_EB.transpose() * Vec3<T>(T(0), T(0), g);
   T xdot[kNumStates];
   const T one(1);
-  RigidBodyDerivative(x, R_EB, f, Vec3<T>(T(0), T(0), T(0)), one, one, one, one, xdot);
+  RigidBodyDerivative(x, e, R_EB, f, Vec3<T>(T(0), T(0), T(0)), one, one, one, one, xdot);
   for (int i = 0; i < kNumKinematicStates; ++i) zdot[i] = xdot[i];
 }
 
