@@ -4,11 +4,17 @@
 
 namespace coaxid {
 
-std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
-                           const std::vector<std::string>& symptom_channels,
-                           const std::vector<std::string>& excluded, int max_refits,
-                           double min_share_of_excess, double alpha,
-                           const std::vector<std::string>& lost_channels) {
+std::vector<int> RoundShortlist::All() const {
+  std::vector<int> all = first;
+  all.insert(all.end(), on_lost_channels.begin(), on_lost_channels.end());
+  return all;
+}
+
+RoundShortlist Shortlist(const std::vector<CandidateScore>& scores,
+                         const std::vector<std::string>& symptom_channels,
+                         const std::vector<std::string>& excluded, int max_refits,
+                         double min_share_of_excess, double alpha,
+                         const std::vector<std::string>& lost_channels) {
   std::vector<int> passing, blind, symptomatic, promising;
   int most_significant = -1;  // by the score test, of the testable ones that do not pass
   for (size_t k = 0; k < scores.size(); ++k) {
@@ -44,20 +50,22 @@ std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
   at_bounds.insert(at_bounds.end(), symptomatic.begin(), symptomatic.end());
   take(at_bounds, at_most, &out);
   take(promising, at_most > out.size() ? at_most - out.size() : 0, &out);
-  // Beyond the slots: every one acting on a channel the fit has lost.
-  for (int k : symptomatic) {
-    if (ReachesAny(scores[k].channels, lost_channels) &&
-        std::find(out.begin(), out.end(), k) == out.end()) {
-      out.push_back(k);
-    }
-  }
   // The most significant by its score test (uncorrected), when the shares
   // left it out.
   if (most_significant >= 0 && scores[most_significant].p_value < alpha &&
       std::find(out.begin(), out.end(), most_significant) == out.end()) {
     out.push_back(most_significant);
   }
-  return out;
+  RoundShortlist list;
+  // Beyond the slots: every one acting on a channel the fit has lost.
+  for (int k : symptomatic) {
+    if (ReachesAny(scores[k].channels, lost_channels) &&
+        std::find(out.begin(), out.end(), k) == out.end()) {
+      list.on_lost_channels.push_back(k);
+    }
+  }
+  list.first = std::move(out);
+  return list;
 }
 
 std::vector<std::string> LostChannels(const std::map<std::string, FitError>& fit,

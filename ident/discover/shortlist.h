@@ -66,10 +66,18 @@ std::vector<std::string> LostChannels(const std::map<std::string, FitError>& fit
 // flight only, low flight: the declared fit pressed Ixx, Iyy to their upper
 // bound and left p, q at nrmse 0.97-1.01; the bar ranked sixth by its share,
 // the bias last (a share of 152 %), neither was refitted, nothing added).
-std::vector<int> Shortlist(const std::vector<CandidateScore>& scores,
-                           const std::vector<std::string>& symptom_channels,
-                           const std::vector<std::string>& excluded, int max_refits,
-                           double min_share_of_excess, double alpha,
-                           const std::vector<std::string>& lost_channels = {});
+// They are refitted after the others, and only when none of those is added
+// (RefitShortlisted): a round that finds its effect among the slots does
+// not need them.
+struct RoundShortlist {
+  std::vector<int> first;             // the slots, and the most significant
+  std::vector<int> on_lost_channels;  // beyond the slots, acting on a lost channel
+  std::vector<int> All() const;       // first, then on_lost_channels
+};
+RoundShortlist Shortlist(const std::vector<CandidateScore>& scores,
+                         const std::vector<std::string>& symptom_channels,
+                         const std::vector<std::string>& excluded, int max_refits,
+                         double min_share_of_excess, double alpha,
+                         const std::vector<std::string>& lost_channels = {});
 
 }  // namespace coaxid

@@ -45,11 +45,11 @@ TEST(Shortlist, AShareAboveOneRanksLastAmongTheCandidatesAtABound) {
       Score("wind", 1.7e-4, false, {"u", "v", "az", "w"}, /*blind=*/true),
       Score("ground_effect", 0.0063, false, {"az", "w"}),
       Score("motor_lag", 1.9e-5, false, {"az", "w", "p"})};
-  const std::vector<int> picked = Shortlist(scores, {"az", "w"}, {}, 3, 0.3, 0.01);
+  const std::vector<int> picked = Shortlist(scores, {"az", "w"}, {}, 3, 0.3, 0.01).All();
   EXPECT_EQ(Names(scores, picked),
             (std::vector<std::string>{"wind", "accel_bias", "ground_effect"}));
   // With room for all, the 406 % comes after every informative share.
-  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {}, 10, 0.3, 0.01)),
+  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {}, 10, 0.3, 0.01).All()),
             (std::vector<std::string>{"wind", "accel_bias", "ground_effect", "motor_lag",
                                       "wake_interference"}));
 }
@@ -69,19 +69,19 @@ TEST(Shortlist, TheMostSignificantAtABoundIsRefittedWhenTheSharesLeaveItOut) {
       Score("servo_lag", 0.0, false, {"ax", "ay", "az", "w"})};
   const double p_values[] = {0.00116, 0.063, 0.225, 0.635, 0.669, 0.769};
   for (size_t k = 0; k < scores.size(); ++k) scores[k].p_value = p_values[k];
-  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {}, 3, 0.3, 0.01)),
+  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {}, 3, 0.3, 0.01).All()),
             (std::vector<std::string>{"wind", "accel_bias", "motor_lag", "ground_effect"}));
   // Already in the slots: not twice.
-  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {}, 10, 0.3, 0.01)),
+  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {}, 10, 0.3, 0.01).All()),
             (std::vector<std::string>{"wind", "accel_bias", "motor_lag", "servo_lag",
                                       "ground_effect"}));
   // No power at the bound (seed 9744: every p-value 0.51-0.99): the shares alone.
   scores[0].p_value = 0.51;
-  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {}, 3, 0.3, 0.01)),
+  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {}, 3, 0.3, 0.01).All()),
             (std::vector<std::string>{"wind", "accel_bias", "motor_lag"}));
   // Excluded (a removed effect not yet allowed back): never.
   scores[0].p_value = 0.00116;
-  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {"ground_effect"}, 3, 0.3, 0.01)),
+  EXPECT_EQ(Names(scores, Shortlist(scores, {"az", "w"}, {"ground_effect"}, 3, 0.3, 0.01).All()),
             (std::vector<std::string>{"wind", "accel_bias", "motor_lag"}));
 }
 
@@ -98,12 +98,12 @@ TEST(Shortlist, TheMostSignificantIsRefittedWhenNothingElseIs) {
       Score("stabilizer_bar", 0.142, false, {"p", "q"})};
   const double p_values[] = {0.00108, 0.00233, 0.00234, 0.00698, 0.0594};
   for (size_t k = 0; k < scores.size(); ++k) scores[k].p_value = p_values[k];
-  EXPECT_EQ(Names(scores, Shortlist(scores, {}, {}, 3, 0.3, 0.01)),
+  EXPECT_EQ(Names(scores, Shortlist(scores, {}, {}, 3, 0.3, 0.01).All()),
             (std::vector<std::string>{"gyroscopic"}));
   // Not below alpha: nothing.
   scores[0].p_value = 0.014;
   scores[1].p_value = scores[2].p_value = scores[3].p_value = 0.02;
-  EXPECT_TRUE(Shortlist(scores, {}, {}, 3, 0.3, 0.01).empty());
+  EXPECT_TRUE(Shortlist(scores, {}, {}, 3, 0.3, 0.01).All().empty());
 }
 
 // Seed 9573 of discover_controllers.yaml (a stabilizer bar, flight only, low
@@ -124,14 +124,21 @@ TEST(Shortlist, EveryCandidateOnAChannelTheFitHasLostIsRefitted) {
   const double p_values[] = {0.0177, 0.0199, 0.0331, 0.144, 0.545, 0.752};
   for (size_t k = 0; k < scores.size(); ++k) scores[k].p_value = p_values[k];
   const std::vector<std::string> distorted = {"p", "q", "r", "ax", "ay", "az", "u", "v", "w"};
-  EXPECT_EQ(Names(scores, Shortlist(scores, distorted, {}, 3, 0.3, 0.01)),
+  EXPECT_EQ(Names(scores, Shortlist(scores, distorted, {}, 3, 0.3, 0.01).All()),
             (std::vector<std::string>{"wind", "gyroscopic", "rotor_drag"}));
-  EXPECT_EQ(Names(scores, Shortlist(scores, distorted, {}, 3, 0.3, 0.01, {"p", "q"})),
+  EXPECT_EQ(Names(scores, Shortlist(scores, distorted, {}, 3, 0.3, 0.01, {"p", "q"}).All()),
             (std::vector<std::string>{"wind", "gyroscopic", "rotor_drag", "stabilizer_bar",
                                       "swashplate_bias"}));
+  // The slots are refitted first; those beyond them only if none of the
+  // slots' is added.
+  const RoundShortlist split = Shortlist(scores, distorted, {}, 3, 0.3, 0.01, {"p", "q"});
+  EXPECT_EQ(Names(scores, split.first),
+            (std::vector<std::string>{"wind", "gyroscopic", "rotor_drag"}));
+  EXPECT_EQ(Names(scores, split.on_lost_channels),
+            (std::vector<std::string>{"stabilizer_bar", "swashplate_bias"}));
   // A lost channel no symptom distorts widens nothing (RefitShortlisted
   // passes only distorted ones); nor does it without a parameter at a bound.
-  EXPECT_EQ(Names(scores, Shortlist(scores, {}, {}, 3, 0.3, 0.01, {"p", "q"})),
+  EXPECT_EQ(Names(scores, Shortlist(scores, {}, {}, 3, 0.3, 0.01, {"p", "q"}).All()),
             (std::vector<std::string>{}));
 }
 
@@ -164,13 +171,13 @@ TEST(Shortlist, PassingFirstThenAtBoundsThenPromisingEachCapped) {
       Score("g", 0.1),        Score("h", 0.7, false, {"u"}, true)};
   // Passing: capped at 3 in the scores' order; at bounds: blind h, then e;
   // promising (share >= 0.15): none left under the cap of 3 in all.
-  EXPECT_EQ(Names(scores, Shortlist(scores, {"w"}, {}, 3, 0.3, 0.01)),
+  EXPECT_EQ(Names(scores, Shortlist(scores, {"w"}, {}, 3, 0.3, 0.01).All()),
             (std::vector<std::string>{"a", "b", "c", "h", "e"}));
   // No parameter at a bound: f (0.6) is promising, g (0.1) is not; removed
   // effects never come back.
   const std::vector<CandidateScore> few = {Score("a", 0.5, true), Score("f", 0.6),
                                            Score("g", 0.1), Score("x", 0.9)};
-  EXPECT_EQ(Names(few, Shortlist(few, {}, {"x"}, 3, 0.3, 0.01)), (std::vector<std::string>{"a", "f"}));
+  EXPECT_EQ(Names(few, Shortlist(few, {}, {"x"}, 3, 0.3, 0.01).All()), (std::vector<std::string>{"a", "f"}));
 }
 
 }  // namespace
