@@ -14,7 +14,7 @@
 #   bench/discover_speed.sh configs/studies/discover_confusion.yaml 20000 40
 #
 # Use seeds no study has judged or timed (docs/discover_confusion.md lists
-# them; 20000-20059 and 20100-20179 are taken). Run on an idle machine: the
+# them; 20000-20059, 20100-20179 and 20200-20279 are taken). Run on an idle machine: the
 # numbers are wall times. Needs bc and python3.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
