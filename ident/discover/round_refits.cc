@@ -224,10 +224,10 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
 
 
 // The round's refits as ChooseOfRound reads them.
-std::vector<RefitOfRound> Judged(const RoundRefits& r, std::vector<CandidateScore>* scores) {
+std::vector<RefitOfRound> Judged(const RoundRefits& r, const std::vector<CandidateScore>& scores) {
   std::vector<RefitOfRound> judged;
   for (size_t k = 0; k < r.refits.size(); ++k) {
-    judged.push_back({&(*scores)[r.shortlist[k]], r.refits[k].ok, r.refits[k].share_of_all_excess});
+    judged.push_back({&scores[r.shortlist[k]], r.refits[k].ok, r.refits[k].share_of_all_excess});
   }
   return judged;
 }
@@ -236,7 +236,7 @@ std::vector<RefitOfRound> Judged(const RoundRefits& r, std::vector<CandidateScor
 // qualifying refit vetoed by one at a bound is marked so and reported.
 void ChooseAndSay(RoundRefits* r, size_t family, std::vector<CandidateScore>* scores,
                   const DiscoveryOptions& o) {
-  r->choice = ChooseOfRound(Judged(*r, scores), WaldLevel(o, family), o.min_channels_excess,
+  r->choice = ChooseOfRound(Judged(*r, *scores), WaldLevel(o, family), o.min_channels_excess,
                             o.decisive_share_of_all_excess);
   if (r->choice.vetoed >= 0) {
     CandidateScore& s = (*scores)[r->shortlist[r->choice.vetoed]];
@@ -312,12 +312,12 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
   r.shortlist = list.first;
   r.refits = RefitInParallel(pass, estimation, validation, now, r.shortlist, family, at_bounds,
                              scores, o, start);
-  const RoundChoice slots = ChooseOfRound(Judged(r, scores), WaldLevel(o, family),
+  const RoundChoice slots = ChooseOfRound(Judged(r, *scores), WaldLevel(o, family),
                                           o.min_channels_excess, o.decisive_share_of_all_excess);
   if (slots.added >= 0 && !list.on_lost_channels.empty()) {
     // Measured (bench/discover_speed.sh, 41 flight-only logs): the lost
-    // channels widened 15 rounds to up to eleven refits, and every log
-    // beyond 20 s had one.
+    // channels widened rounds to up to eleven refits in 15 of the logs,
+    // among them every log beyond 20 s.
     const std::string& effect = (*scores)[r.shortlist[slots.added]].effect;
     for (int k : list.on_lost_channels) {
       CandidateScore& s = (*scores)[k];

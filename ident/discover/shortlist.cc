@@ -1,6 +1,7 @@
 #include "ident/discover/shortlist.h"
 
 #include <algorithm>
+#include <utility>
 
 namespace coaxid {
 
