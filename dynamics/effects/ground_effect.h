@@ -22,11 +22,19 @@ struct GroundEffect : EffectBase {
   template <typename T>
   static void AddLoads(const EffectContext<T>& c, const T* p, AeroLoads<T>* loads) {
     if (c.setting != Setting::kFlight) return;
-    // k_ge (R / 4h)^2 is capped at 0.95 so the factor stays finite on the floor.
-    T x(0.95);
+    // k_ge (R / 4h)^2 is capped at 0.95 so the factor stays finite on the
+    // floor; a logged height at or below 0 (a datum a few cm off) is on the
+    // floor: the cap for any k_ge > 0 (the limit h -> 0+), and k_ge = 0
+    // stays absent there too (measured: a low flight dipping to h = -2.7 cm
+    // put the absent candidate's 20 x thrust into one segment of the
+    // linearised fit, 1000 x the fit's own residual).
+    const T kCap(0.95);
+    T x(0);
     if (c.height > T(0)) {
       const T q = c.theta[kRotorRadius] / (T(4) * c.height);
-      if (p[0] * q * q < T(0.95)) x = p[0] * q * q;
+      x = p[0] * q * q < kCap ? p[0] * q * q : kCap;
+    } else if (p[0] > T(0)) {
+      x = kCap;
     }
     const T gain = T(1) / (T(1) - x) - T(1);
     loads->force_B[2] += gain * c.rotor_z;

@@ -678,6 +678,13 @@ TYPED_TEST(VehicleModelTest, GroundEffectScalesRotorThrustInFlightOnly) {
       EvalLoads<T>(c.base.model, c.th_base, kFlightInput, Setting::kFlight, x.data());
   // 1 / (1 - 0.95) = 20 to rounding (~1e-15); 1e-12 relative leaves margin.
   ExpectRel(capped.Z1, 20.0 * base.Z1, 1e-12, 0, "capped ground effect Z1");
+  // At or below the floor's datum (h <= 0): the same cap, the limit h -> 0+.
+  for (double z : {0.0, 0.02}) {
+    x[kZ] = z;
+    ExpectRel(EvalLoads<T>(c.with.model, c.th_with, kFlightInput, Setting::kFlight, x.data()).Z1,
+              20.0 * EvalLoads<T>(c.base.model, c.th_base, kFlightInput, Setting::kFlight, x.data()).Z1,
+              1e-12, 0, "ground effect Z1 at z = " + std::to_string(z));
+  }
   // A balance is far from the floor: nothing changes.
   ExpectLoadsEqual(EvalLoads<T>(c.with.model, c.th_with, kFlightInput, Setting::kBalance, nullptr),
                    EvalLoads<T>(c.base.model, c.th_base, kFlightInput, Setting::kBalance, nullptr),
@@ -857,9 +864,16 @@ TYPED_TEST(VehicleModelTest, EffectsWithZeroOrDefaultParametersAreTheBaseModel) 
       ASSERT_TRUE(v.model.EffectEnabled(EffectIndex(info.name))) << info.name;
       const Eigen::VectorXd th = v.parameters.Values();
       const std::string what = info.name + (zero ? " at zero" : " at defaults");
-      ExpectLoadsEqual(EvalLoads<T>(v.model, th, kFlightInput, Setting::kFlight, x.data()),
-                       EvalLoads<T>(base.model, th_base, kFlightInput, Setting::kFlight, x.data()),
-                       what + ", flight");
+      // Absent at any logged height: on the floor and below it too (h = -z
+      // <= 0, a height datum a few cm off), where ground_effect's factor is
+      // capped for any k_ge > 0.
+      for (double z : {x[kZ], 0.0, 0.03}) {
+        State at = x;
+        at[kZ] = z;
+        ExpectLoadsEqual(EvalLoads<T>(v.model, th, kFlightInput, Setting::kFlight, at.data()),
+                         EvalLoads<T>(base.model, th_base, kFlightInput, Setting::kFlight, at.data()),
+                         what + ", flight at z = " + std::to_string(z));
+      }
       ExpectLoadsEqual(EvalLoads<T>(v.model, th, kFlightInput, Setting::kBalance, nullptr),
                        EvalLoads<T>(base.model, th_base, kFlightInput, Setting::kBalance, nullptr),
                        what + ", balance");
