@@ -14,8 +14,8 @@
 #   bench/discover_speed.sh configs/studies/discover_confusion.yaml 20000 40
 #
 # Use seeds no study has judged or timed (docs/discover_confusion.md lists
-# them; 20000-20059, 20100-20179 and 20200-20279 are taken). Run on an idle machine: the
-# numbers are wall times. Needs bc and python3.
+# them; 20000-20059, 20100-20179, 20200-20279 and 20300-20379 are taken).
+# Run on an idle machine: the numbers are wall times. Needs bc and python3.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 coaxid="${COAXID_BINARY:-$root/build/coaxid}"
