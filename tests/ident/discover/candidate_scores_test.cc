@@ -172,28 +172,40 @@ TEST(SymptomaticParameters, InertiasFarFromTheTriangleInequality) {
 // candidate absent, the lags too, whose columns are taken 2 ms beside
 // absence (they have no derivative at T = 0). Measured before: with the 2 ms
 // lags in the residual, a 20-minute flight with no undeclared effect had
-// motor_lag, servo_lag, rotor_damping and wind pass at F 170-2000.
+// motor_lag, servo_lag, rotor_damping and wind pass at F 170-2000. The same
+// on a flight logged about a height datum 0 (half its rows at h = -z <= 0,
+// a datum off by the flight's height): measured before, an absent ground
+// effect there multiplied the thrust by 20, and the linearised residual of a
+// low flight dipping to h = -2.7 cm was 1000 x the fit's own.
 TEST(LinearisePass, TheResidualIsTheFitsOwnWithEveryCandidateAbsent) {
   FlightScenario f = ShippedFlightScenario().flight;
   f.duration_s = 6;
-  const std::vector<EstimationLog> logs = {MakeEstimationLog(SimulateFlight(Truth({}), f, 3))};
-  const OutputErrorOptions options = OneSecondSegments();
-  OutputErrorResult fit;
-  const CandidatePass pass = DeclaredPass(logs, options, &fit);
-  ASSERT_TRUE(fit.usable) << fit.why_not_usable;
-  ASSERT_TRUE(Has(pass.candidates, "motor_lag") && Has(pass.candidates, "servo_lag"));
-  LinearisedFit declared_only;
-  std::string why;
-  ASSERT_TRUE(LineariseFit(pass.fitted, logs, fit.segments, fit.noise, {20}, options, {},
-                           &declared_only, &why))
-      << why;
-  EXPECT_NEAR(pass.linearised.rss, declared_only.rss, 1e-9 * declared_only.rss);
-  // The stabilizer bar's two states add a continuity tie per segment
-  // boundary (zero at absence: they are carried from segment to segment).
-  ASSERT_TRUE(Has(pass.candidates, "stabilizer_bar"));
-  const int ties = static_cast<int>(fit.segments[0].starts.size()) - 1;
-  EXPECT_EQ(pass.linearised.num_residuals, declared_only.num_residuals + 2 * ties);
-  EXPECT_EQ(pass.linearised.states_per_segment, kNumStates + 2);
+  for (bool about_the_datum : {false, true}) {
+    SCOPED_TRACE(about_the_datum ? "logged about h = 0" : "logged as flown");
+    std::vector<EstimationLog> logs = {MakeEstimationLog(SimulateFlight(Truth({}), f, 3))};
+    if (about_the_datum) {
+      const int z = logs[0].ChannelColumn(kZ);
+      ASSERT_GE(z, 0);
+      logs[0].values.col(z).array() -= logs[0].values.col(z).mean();
+    }
+    const OutputErrorOptions options = OneSecondSegments();
+    OutputErrorResult fit;
+    const CandidatePass pass = DeclaredPass(logs, options, &fit);
+    ASSERT_TRUE(fit.usable) << fit.why_not_usable;
+    ASSERT_TRUE(Has(pass.candidates, "motor_lag") && Has(pass.candidates, "servo_lag"));
+    LinearisedFit declared_only;
+    std::string why;
+    ASSERT_TRUE(LineariseFit(pass.fitted, logs, fit.segments, fit.noise, {20}, options, {},
+                             &declared_only, &why))
+        << why;
+    EXPECT_NEAR(pass.linearised.rss, declared_only.rss, 1e-9 * declared_only.rss);
+    // The stabilizer bar's two states add a continuity tie per segment
+    // boundary (zero at absence: they are carried from segment to segment).
+    ASSERT_TRUE(Has(pass.candidates, "stabilizer_bar"));
+    const int ties = static_cast<int>(fit.segments[0].starts.size()) - 1;
+    EXPECT_EQ(pass.linearised.num_residuals, declared_only.num_residuals + 2 * ties);
+    EXPECT_EQ(pass.linearised.states_per_segment, kNumStates + 2);
+  }
 }
 
 // Issue 13, seed 6215 of the confusion study (undeclared CG offset, flight
