@@ -681,9 +681,12 @@ TYPED_TEST(VehicleModelTest, GroundEffectScalesRotorThrustInFlightOnly) {
   // At or below the floor's datum (h <= 0): the same cap, the limit h -> 0+.
   for (double z : {0.0, 0.02}) {
     x[kZ] = z;
-    ExpectRel(EvalLoads<T>(c.with.model, c.th_with, kFlightInput, Setting::kFlight, x.data()).Z1,
-              20.0 * EvalLoads<T>(c.base.model, c.th_base, kFlightInput, Setting::kFlight, x.data()).Z1,
-              1e-12, 0, "ground effect Z1 at z = " + std::to_string(z));
+    const Loads on_floor =
+        EvalLoads<T>(c.with.model, c.th_with, kFlightInput, Setting::kFlight, x.data());
+    const Loads none =
+        EvalLoads<T>(c.base.model, c.th_base, kFlightInput, Setting::kFlight, x.data());
+    ExpectRel(on_floor.Z1, 20.0 * none.Z1, 1e-12, 0,
+              "ground effect Z1 at z = " + std::to_string(z));
   }
   // A balance is far from the floor: nothing changes.
   ExpectLoadsEqual(EvalLoads<T>(c.with.model, c.th_with, kFlightInput, Setting::kBalance, nullptr),
@@ -870,9 +873,10 @@ TYPED_TEST(VehicleModelTest, EffectsWithZeroOrDefaultParametersAreTheBaseModel) 
       for (double z : {x[kZ], 0.0, 0.03}) {
         State at = x;
         at[kZ] = z;
-        ExpectLoadsEqual(EvalLoads<T>(v.model, th, kFlightInput, Setting::kFlight, at.data()),
-                         EvalLoads<T>(base.model, th_base, kFlightInput, Setting::kFlight, at.data()),
-                         what + ", flight at z = " + std::to_string(z));
+        const Loads with = EvalLoads<T>(v.model, th, kFlightInput, Setting::kFlight, at.data());
+        const Loads without =
+            EvalLoads<T>(base.model, th_base, kFlightInput, Setting::kFlight, at.data());
+        ExpectLoadsEqual(with, without, what + ", flight at z = " + std::to_string(z));
       }
       ExpectLoadsEqual(EvalLoads<T>(v.model, th, kFlightInput, Setting::kBalance, nullptr),
                        EvalLoads<T>(base.model, th_base, kFlightInput, Setting::kBalance, nullptr),
