@@ -32,7 +32,8 @@ struct GroundEffect : EffectBase {
     T x(0);
     if (c.height > T(0)) {
       const T q = c.theta[kRotorRadius] / (T(4) * c.height);
-      x = p[0] * q * q < kCap ? p[0] * q * q : kCap;
+      const T uncapped = p[0] * q * q;
+      x = uncapped < kCap ? uncapped : kCap;
     } else if (p[0] > T(0)) {
       x = kCap;
     }

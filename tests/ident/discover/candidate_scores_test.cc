@@ -180,9 +180,10 @@ TEST(SymptomaticParameters, InertiasFarFromTheTriangleInequality) {
 TEST(LinearisePass, TheResidualIsTheFitsOwnWithEveryCandidateAbsent) {
   FlightScenario f = ShippedFlightScenario().flight;
   f.duration_s = 6;
+  const EstimationLog as_flown = MakeEstimationLog(SimulateFlight(Truth({}), f, 3));
   for (bool about_the_datum : {false, true}) {
     SCOPED_TRACE(about_the_datum ? "logged about h = 0" : "logged as flown");
-    std::vector<EstimationLog> logs = {MakeEstimationLog(SimulateFlight(Truth({}), f, 3))};
+    std::vector<EstimationLog> logs = {as_flown};
     if (about_the_datum) {
       const int z = logs[0].ChannelColumn(kZ);
       ASSERT_GE(z, 0);
