@@ -58,7 +58,8 @@ Simulator::Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
 }
 
 bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::VectorXd& x0,
-                    Trajectory* out, const HeldInput* start) {
+                    Trajectory* out, const HeldInput* start,
+                    const std::vector<Eigen::VectorXd>* known_states) {
   CHECK(first >= 0 && first <= last && last < inputs.size());
   const int n = ode_.NumStates();
   CHECK_EQ(x0.size(), n);
@@ -73,6 +74,9 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
   out->times[0] = inputs.time(first);
   out->states[0] = x0;
   const bool with_sensitivities = columns_ > 0;
+  const bool replay = known_states != nullptr && with_sensitivities &&
+                      method_ == SensitivityMethod::kRungeKuttaPerHold;
+  if (replay) CHECK_EQ(static_cast<int>(known_states->size()), last - first + 1);
   out->sensitivities.resize(with_sensitivities ? samples : 0);
   // The natural initial sensitivities: [I | 0] (initial-state columns come
   // first when carried, SensitivityOptions).
@@ -92,13 +96,24 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
     bool ok;
     if (method_ == SensitivityMethod::kRungeKuttaPerHold && with_sensitivities) {
       x_start = x;
-      ok = integrator_->Reset(inputs.time(k), x) && integrator_->AdvanceTo(inputs.time(k + 1), &x);
+      if (replay) {
+        x = (*known_states)[k + 1 - first];
+        ok = true;
+      } else {
+        ok = integrator_->Reset(inputs.time(k), x) &&
+             integrator_->AdvanceTo(inputs.time(k + 1), &x);
+      }
       if (ok && x.allFinite() &&
-          !StepSensitivities(inputs.time(k), inputs.time(k + 1), x_start, x, &S) &&
-          !FallBack(inputs.time(k), inputs.time(k + 1), x_start, &x, &S)) {
-        error_ = "sensitivities failed between t = " + std::to_string(inputs.time(k)) + " and " +
-                 std::to_string(inputs.time(k + 1)) + " s: " + fallback_->last_error();
-        return false;
+          !StepSensitivities(inputs.time(k), inputs.time(k + 1), x_start, x, &S)) {
+        // The fallback's state replaces the integrator's from here on, and
+        // the integrator's next step hint is the one it would have had: the
+        // run is redone integrating, as without known states.
+        if (replay) return Run(inputs, first, last, x0, out, start);
+        if (!FallBack(inputs.time(k), inputs.time(k + 1), x_start, &x, &S)) {
+          error_ = "sensitivities failed between t = " + std::to_string(inputs.time(k)) +
+                   " and " + std::to_string(inputs.time(k + 1)) + " s: " + fallback_->last_error();
+          return false;
+        }
       }
     } else if (variational_) {
       z.head(n) = x;

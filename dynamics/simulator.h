@@ -66,8 +66,17 @@ class Simulator {
   // same length allocates nothing after the first.
   // start: row `first` as applied, when the caller has it (HeldInputPath);
   // null walks the lag from row 0.
+  // known_states: the states at samples first..last of a run from the same
+  // x0 at the same theta without sensitivities, by a simulator with the same
+  // integrator options (the trial point a Jacobian is next asked at). With
+  // kRungeKuttaPerHold the state is then not integrated again: only the
+  // per-hold sensitivity steps run along it (the integration is a third of
+  // a pass with sensitivities, bench/ident/output_error FlightPass). An
+  // interval that falls back to the variational equations redoes the run
+  // integrating, so the result is bit for bit the run without them.
   bool Run(const InputHold& inputs, int first, int last, const Eigen::VectorXd& x0,
-           Trajectory* out, const HeldInput* start = nullptr);
+           Trajectory* out, const HeldInput* start = nullptr,
+           const std::vector<Eigen::VectorXd>* known_states = nullptr);
 
   const std::string& last_error() const { return error_; }
   const Integrator& integrator() const { return *integrator_; }

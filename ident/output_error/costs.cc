@@ -85,9 +85,14 @@ const Trajectory* FlightSegmentCost::Simulate(const double* start_state,
   const auto run_start = Clock::now();
   HeldInput start;
   if (path_) start = path_->At(first_, model_.InputLags(theta.data()));
+  // Sensitivities asked at the point of the last run without them (a trial
+  // point the trust region accepted) run along its states.
+  const bool along_plain_run = sensitivities && plain_run_.At(start_state, theta_scaled) &&
+                               plain_run_.ok && plain_run_.integrated;
   const bool ok = simulator.Run(log_.inputs, first_, last_,
                                 Eigen::Map<const Eigen::VectorXd>(start_state, n_),
-                                &trajectory, path_ ? &start : nullptr);
+                                &trajectory, path_ ? &start : nullptr,
+                                along_plain_run ? &plain_run_.trajectory.states : nullptr);
   // A failed trial point is routine (the trust region shrinks); -v=1 says why.
   if (!ok) {
     VLOG(1) << "segment rows " << first_ << ".." << last_
@@ -106,6 +111,7 @@ const Trajectory* FlightSegmentCost::Simulate(const double* start_state,
     plain_run_.trajectory.sensitivities.clear();
   }
   plain_run_.ok = ok;
+  plain_run_.integrated = !sensitivities;
   plain_run_.start_state = Eigen::Map<const Eigen::VectorXd>(start_state, n_);
   plain_run_.theta_scaled = Eigen::Map<const Eigen::VectorXd>(theta_scaled, free_.size());
   plain_run_.valid = true;

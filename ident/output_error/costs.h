@@ -130,6 +130,10 @@ class FlightSegmentCost : public ceres::CostFunction {
                              bool sensitivities) const;
   struct CachedRun {
     bool valid = false, ok = false;
+    // The states are the integrator's alone (a run without sensitivities):
+    // not those of a run whose sensitivities fell back to the variational
+    // equations, which set the state too.
+    bool integrated = false;
     Eigen::VectorXd start_state, theta_scaled;
     Trajectory trajectory;
     bool At(const double* start_state, const double* theta_scaled) const;

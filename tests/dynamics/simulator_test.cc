@@ -271,6 +271,58 @@ TEST(Simulator, StiffIntervalsLeaveTheRungeKuttaStep) {
   EXPECT_LT(WorstPerHoldError(f, theta, &worst_at), 1e-5) << "at " << worst_at;
 }
 
+// Sensitivities along the states of a run without them (the output-error
+// fit's trial point, accepted) are bit for bit those of a run that
+// integrates the states itself: at the nominal vehicle, where those states
+// are the plain run's, and with the stiff bar, whose intervals fall back to
+// the variational equations, which set the state too (the run is then
+// redone integrating). States from another point are not what it is given
+// for: with them the sensitivities differ.
+TEST(Simulator, SensitivitiesAlongAPlainRunsStatesAreThoseOfAFullRun) {
+  const Fixture f = MakeFixture();
+  IntegratorOptions options;  // as an output-error fit's segments
+  options.method = IntegratorOptions::Method::kExplicitRungeKutta;
+  options.relative_tolerance = 1e-7;
+  options.absolute_tolerance = 1e-9;
+  options.sensitivity_error_control = false;
+  Eigen::VectorXd stiff = f.vehicle.parameters.Values();
+  stiff[f.vehicle.parameters.IndexOrThrow("stabilizer_bar.T_b")] = 1e-3;
+  for (const bool falls_back : {false, true}) {
+    const Eigen::VectorXd theta = falls_back ? stiff : f.vehicle.parameters.Values();
+    std::vector<int> params;
+    for (int i = 0; i < theta.size(); ++i) params.push_back(i);
+    Simulator plain(f.vehicle.model, theta, options);
+    Simulator sensitive(f.vehicle.model, theta, options, {true, true}, params,
+                        SensitivityMethod::kRungeKuttaPerHold);
+    Trajectory states, full, along;
+    ASSERT_TRUE(plain.Run(f.inputs, 100, 300, f.x0, &states)) << plain.last_error();
+    ASSERT_TRUE(sensitive.Run(f.inputs, 100, 300, f.x0, &full)) << sensitive.last_error();
+    ASSERT_TRUE(sensitive.Run(f.inputs, 100, 300, f.x0, &along, nullptr, &states.states))
+        << sensitive.last_error();
+    ASSERT_EQ(full.states.size(), along.states.size());
+    EXPECT_EQ(full.states != states.states, falls_back);
+    for (size_t k = 0; k < full.states.size(); ++k) {
+      ASSERT_EQ(full.states[k], along.states[k]) << "sample " << k;
+      ASSERT_EQ(full.sensitivities[k], along.sensitivities[k]) << "sample " << k;
+    }
+  }
+  // Along states shifted by 1e-6 rad in roll (another start, not this run's):
+  // the sensitivities follow the states given.
+  const Eigen::VectorXd theta = f.vehicle.parameters.Values();
+  std::vector<int> params;
+  for (int i = 0; i < theta.size(); ++i) params.push_back(i);
+  Simulator plain(f.vehicle.model, theta, options);
+  Simulator sensitive(f.vehicle.model, theta, options, {true, true}, params,
+                      SensitivityMethod::kRungeKuttaPerHold);
+  Eigen::VectorXd other = f.x0;
+  other[kPhi] += 1e-6;
+  Trajectory states, full, along;
+  ASSERT_TRUE(plain.Run(f.inputs, 100, 300, other, &states));
+  ASSERT_TRUE(sensitive.Run(f.inputs, 100, 300, f.x0, &full));
+  ASSERT_TRUE(sensitive.Run(f.inputs, 100, 300, f.x0, &along, nullptr, &states.states));
+  EXPECT_NE(full.sensitivities.back(), along.sensitivities.back());
+}
+
 TEST(Simulator, ReportsBlownUpParametersInsteadOfCrashing) {
   const Fixture f = MakeFixture();
   Eigen::VectorXd theta = f.vehicle.parameters.Values();

@@ -6,7 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <random>
+#include <vector>
 
 #include <Eigen/LU>
 #include <ceres/jet.h>
@@ -37,6 +42,36 @@ TEST(SinCos, EqualsTheJetsOwnSinAndCosBitForBit) {
     SinCos(a.a, &sd, &cd);
     ASSERT_EQ(sd, std::sin(a.a));
     ASSERT_EQ(cd, std::cos(a.a));
+  }
+}
+
+// The per-thread table of recent angles serves an angle met again, and a
+// slot another angle took over gives that angle's values: drawn from a small
+// pool so that angles repeat and share slots, every value is sin's and cos's.
+TEST(SinCos, RecentAnglesServedAgainAreBitForBitTheFunctions) {
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> angle(-3.2, 3.2);
+  std::vector<double> pool(300);
+  for (double& a : pool) a = angle(rng);
+  pool.push_back(0.0);
+  pool.push_back(-0.0);
+  std::uniform_int_distribution<size_t> pick(0, pool.size() - 1);
+  for (int trial = 0; trial < 20000; ++trial) {
+    const double a = pool[pick(rng)];
+    double s, c;
+    ScalarSinCos(a, &s, &c);
+    ASSERT_EQ(std::signbit(s), std::signbit(std::sin(a))) << a;
+    ASSERT_EQ(s, std::sin(a)) << a;
+    ASSERT_EQ(c, std::cos(a)) << a;
+  }
+  // Not a number, also the one whose bits mark an empty slot.
+  std::uint64_t empty = ~std::uint64_t{0};
+  double marked;
+  std::memcpy(&marked, &empty, sizeof marked);
+  for (double a : {std::numeric_limits<double>::quiet_NaN(), marked}) {
+    double s = 0, c = 0;
+    ScalarSinCos(a, &s, &c);
+    EXPECT_TRUE(std::isnan(s) && std::isnan(c));
   }
 }
 
