@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include "dynamics/outputs.h"
+#include "dynamics/simulator.h"
+#include "dynamics/vehicle.h"
 #include "experiments/simulation/simulate_experiment.h"
 #include "ident/free_parameters.h"
 #include "ident/output_error/costs.h"
@@ -54,6 +56,52 @@ OutputErrorOptions FastOptions() {
   OutputErrorOptions o;
   o.num_threads = 2;
   return o;
+}
+
+// The segments' integrator caps the steps of one 5 ms hold
+// (OutputErrorOptions::DefaultIntegrator): a mode 50 times faster than the
+// fastest the bounds allow (the stabilizer bar's T_b at 1 ms, its lower
+// bound 0.05 s) still integrates, its sensitivities through the
+// variational equations (h ||A|| > 2); a non-physical one (T_b = 10 us, as
+// a restart's wild trial point can make) fails the run at once instead of
+// grinding through a hundred or more steps a hold, though ten times the cap
+// would integrate it (measured, seed 20468 of bench/discover_speed.sh: 332 s
+// of restarts at 500 steps, 33 s at 50, the same answer).
+TEST(OutputError, TheSegmentIntegratorTakesStiffModesAndRefusesNonPhysicalOnes) {
+  VehicleConfig config = LoadVehicleConfig(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
+  config.effects.emplace_back("stabilizer_bar", std::map<std::string, ParameterOverride>{});
+  const Vehicle vehicle = MakeVehicle(config);
+  FlightScenario scenario;
+  scenario.duration_s = 1.5;
+  scenario.excitation.start_s = 0.0;
+  const EstimationLog log = MakeEstimationLog(SimulateFlight(vehicle, scenario, 5));
+  const int bar = vehicle.model.EffectStateOffset(EffectIndex("stabilizer_bar"));
+  Eigen::VectorXd x0 = Eigen::VectorXd::Zero(vehicle.model.NumStates());
+  x0.head(kNumStates) = InitialStateFromLog(log, 20).head(kNumStates);
+  x0[bar] = 0.01;  // the bar off the shaft: its mode is excited
+  std::vector<int> all(vehicle.parameters.size());
+  for (int i = 0; i < vehicle.parameters.size(); ++i) all[i] = i;
+  const int t_b = vehicle.parameters.IndexOrThrow("stabilizer_bar.T_b");
+  IntegratorOptions ten_times = OutputErrorOptions::DefaultIntegrator();
+  ten_times.max_steps_per_interval *= 10;
+  for (const double time_constant : {1e-3, 1e-5}) {
+    Eigen::VectorXd theta = vehicle.parameters.Values();
+    theta[t_b] = time_constant;
+    const bool physical = time_constant == 1e-3;
+    for (const IntegratorOptions& options : {OutputErrorOptions::DefaultIntegrator(), ten_times}) {
+      const bool capped = options.max_steps_per_interval != ten_times.max_steps_per_interval;
+      Simulator plain(vehicle.model, theta, options);
+      Simulator sensitive(vehicle.model, theta, options, {true, true}, all,
+                          SensitivityMethod::kRungeKuttaPerHold);
+      Trajectory a, b;
+      EXPECT_EQ(plain.Run(log.inputs, 20, 220, x0, &a), physical || !capped)
+          << "T_b " << time_constant << ", cap " << options.max_steps_per_interval << ": "
+          << plain.last_error();
+      EXPECT_EQ(sensitive.Run(log.inputs, 20, 220, x0, &b), physical || !capped)
+          << "T_b " << time_constant << ", cap " << options.max_steps_per_interval << ": "
+          << sensitive.last_error();
+    }
+  }
 }
 
 TEST(OutputError, NoiseFreeFlightAndBalanceRecoverTheTruth) {
