@@ -124,6 +124,10 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   // ranked below it stop, whichever finished first, so the outcome does not
   // depend on the timing.
   std::atomic<int> decided_by{n};
+  // The scores as scored: a refit stopped part way has written some of its
+  // fields (its estimates, rss_after) at whatever point it stopped.
+  std::vector<CandidateScore> as_scored;
+  for (int k : shortlist) as_scored.push_back((*scores)[k]);
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
     OutputErrorResult refit;
@@ -177,6 +181,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     const int decider = decided_by.load();
     if (k > decider) {
       const std::string& effect = (*scores)[shortlist[decider]].effect;
+      s = as_scored[k];
       s.refitted = false;
       s.refit_starts.clear();
       s.confirmed = false;

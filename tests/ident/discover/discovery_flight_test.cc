@@ -211,6 +211,11 @@ TEST(DiscoverFlight, ARefitThatDecidesItsRoundChangesNothingByStoppingTheRest) {
     if (s.why_not_confirmed.rfind("not judged", 0) != 0) continue;
     ++not_judged;
     EXPECT_FALSE(s.refitted) << s.effect;
+    // As scored: nothing of the refit that was stopped part way (its
+    // estimates, its Wald test), which depends on where it stopped.
+    EXPECT_EQ(s.parameters.size(), 0) << s.effect;
+    EXPECT_EQ(s.wald_p_value, 1) << s.effect;
+    EXPECT_TRUE(s.refit_starts.empty()) << s.effect;
   }
   ASSERT_GT(not_judged, 0) << "no refit decided its round: this case tests nothing";
   EXPECT_EQ(cut.added, full.added);
