@@ -285,42 +285,41 @@ TEST(Simulator, SensitivitiesAlongAPlainRunsStatesAreThoseOfAFullRun) {
   options.relative_tolerance = 1e-7;
   options.absolute_tolerance = 1e-9;
   options.sensitivity_error_control = false;
-  Eigen::VectorXd stiff = f.vehicle.parameters.Values();
-  stiff[f.vehicle.parameters.IndexOrThrow("stabilizer_bar.T_b")] = 1e-3;
-  for (const bool falls_back : {false, true}) {
-    const Eigen::VectorXd theta = falls_back ? stiff : f.vehicle.parameters.Values();
-    std::vector<int> params;
-    for (int i = 0; i < theta.size(); ++i) params.push_back(i);
+  // Runs from `from` without sensitivities (its states), and from x0 with
+  // them, integrating and along those states.
+  struct Runs {
+    Trajectory states, full, along;
+  };
+  auto run = [&](const Eigen::VectorXd& theta, const Eigen::VectorXd& from) {
+    std::vector<int> params(theta.size());
+    for (int i = 0; i < theta.size(); ++i) params[i] = i;
     Simulator plain(f.vehicle.model, theta, options);
     Simulator sensitive(f.vehicle.model, theta, options, {true, true}, params,
                         SensitivityMethod::kRungeKuttaPerHold);
-    Trajectory states, full, along;
-    ASSERT_TRUE(plain.Run(f.inputs, 100, 300, f.x0, &states)) << plain.last_error();
-    ASSERT_TRUE(sensitive.Run(f.inputs, 100, 300, f.x0, &full)) << sensitive.last_error();
-    ASSERT_TRUE(sensitive.Run(f.inputs, 100, 300, f.x0, &along, nullptr, &states.states))
+    Runs r;
+    EXPECT_TRUE(plain.Run(f.inputs, 100, 300, from, &r.states)) << plain.last_error();
+    EXPECT_TRUE(sensitive.Run(f.inputs, 100, 300, f.x0, &r.full)) << sensitive.last_error();
+    EXPECT_TRUE(sensitive.Run(f.inputs, 100, 300, f.x0, &r.along, nullptr, &r.states.states))
         << sensitive.last_error();
-    ASSERT_EQ(full.states.size(), along.states.size());
-    EXPECT_EQ(full.states != states.states, falls_back);
-    for (size_t k = 0; k < full.states.size(); ++k) {
-      ASSERT_EQ(full.states[k], along.states[k]) << "sample " << k;
-      ASSERT_EQ(full.sensitivities[k], along.sensitivities[k]) << "sample " << k;
+    return r;
+  };
+  Eigen::VectorXd stiff = f.vehicle.parameters.Values();
+  stiff[f.vehicle.parameters.IndexOrThrow("stabilizer_bar.T_b")] = 1e-3;
+  for (const bool falls_back : {false, true}) {
+    const Runs r = run(falls_back ? stiff : f.vehicle.parameters.Values(), f.x0);
+    ASSERT_EQ(r.full.states.size(), r.along.states.size());
+    EXPECT_EQ(r.full.states != r.states.states, falls_back);
+    for (size_t k = 0; k < r.full.states.size(); ++k) {
+      ASSERT_EQ(r.full.states[k], r.along.states[k]) << "sample " << k;
+      ASSERT_EQ(r.full.sensitivities[k], r.along.sensitivities[k]) << "sample " << k;
     }
   }
   // Along states shifted by 1e-6 rad in roll (another start, not this run's):
   // the sensitivities follow the states given.
-  const Eigen::VectorXd theta = f.vehicle.parameters.Values();
-  std::vector<int> params;
-  for (int i = 0; i < theta.size(); ++i) params.push_back(i);
-  Simulator plain(f.vehicle.model, theta, options);
-  Simulator sensitive(f.vehicle.model, theta, options, {true, true}, params,
-                      SensitivityMethod::kRungeKuttaPerHold);
   Eigen::VectorXd other = f.x0;
   other[kPhi] += 1e-6;
-  Trajectory states, full, along;
-  ASSERT_TRUE(plain.Run(f.inputs, 100, 300, other, &states));
-  ASSERT_TRUE(sensitive.Run(f.inputs, 100, 300, f.x0, &full));
-  ASSERT_TRUE(sensitive.Run(f.inputs, 100, 300, f.x0, &along, nullptr, &states.states));
-  EXPECT_NE(full.sensitivities.back(), along.sensitivities.back());
+  const Runs shifted = run(f.vehicle.parameters.Values(), other);
+  EXPECT_NE(shifted.full.sensitivities.back(), shifted.along.sensitivities.back());
 }
 
 TEST(Simulator, ReportsBlownUpParametersInsteadOfCrashing) {
