@@ -35,8 +35,11 @@ RoundShortlist Shortlist(const std::vector<CandidateScore>& scores,
       promising.push_back(static_cast<int>(k));
     }
   }
+  // A share above 1 from a step that left the candidate's bounds: the
+  // linearisation failed (shortlist.h).
   auto ranking_share = [&](int k) {
-    return scores[k].predicted_share <= 1 ? scores[k].predicted_share : -1.0;
+    const CandidateScore& s = scores[k];
+    return s.predicted_share > 1 && s.beyond_linear_range ? -1.0 : s.predicted_share;
   };
   auto by_share = [&](int a, int b) { return ranking_share(a) > ranking_share(b); };
   std::stable_sort(symptomatic.begin(), symptomatic.end(), by_share);

@@ -38,11 +38,21 @@ std::vector<std::string> LostChannels(const std::map<std::string, FitError>& fit
 // while three passing candidates filled the slots); then, up to max_refits in
 // all, the testable ones predicted to remove at least half of
 // min_share_of_excess. Largest predicted share first within each group; a share
-// above 1 (the linearised step would fit the channels below their noise) says
-// the linearisation failed, not how promising the candidate is, and ranks last
+// above 1 (the linearised step would fit the channels below their noise) from
+// a step that left the candidate's bounds (beyond_linear_range) says the
+// linearisation failed, not how promising the candidate is, and ranks last
 // in its group (measured, seed 8000 of discover_controllers.yaml: an undeclared
-// ground effect, Cz at 0; wake_interference "predicted" 406 % and took the slot
-// ground_effect, at 0.6 %, needed). The share and the score test rank
+// ground effect, Cz at 0; wake_interference "predicted" 406 %, its step
+// clipped to 0 in both parameters, and took the slot ground_effect, at
+// 0.6 %, needed). A share above 1 from a step inside the
+// bounds ranks by its share: the drop it predicts includes the segments'
+// continuity ties, which the channels' excess leaves out (measured: seed 9349
+// of the controllers study, 9607 and 11018 of the confusion study, an
+// undeclared ground effect, flight only, Cz at its upper bound: shares 528 %,
+// 447 %, 341 %, each drop 95-98 % of the excess and the ties' weighted RSS
+// together; linearised k_ge 0.921, 1.110, 1.316 against the truth's 0.935,
+// 1.119, 1.375. Ranked last, 9607 and 11018 added nothing). The share and
+// the score test rank
 // candidates differently, and each has ranked a run's effect out of its
 // slots (docs/discover_confusion.md, "Ranking the candidates at a bound by
 // their score test: tried, reverted"): the testable candidate with the
@@ -51,8 +61,9 @@ std::vector<std::string> LostChannels(const std::map<std::string, FitError>& fit
 // it holds whatever the linearised step does (measured: seed 9349 of the
 // controllers study, an undeclared ground effect, flight only, Cz at its
 // upper bound: ground_effect's p = 0.0012, the round's smallest, a predicted
-// share of 528 %; wind, accel_bias and motor_lag took the three slots and
-// nothing was added. Seed 9379, gyroscopic moments and rotor damping with
+// share of 528 %, then ranked last whatever its step; wind, accel_bias and
+// motor_lag took the three slots and nothing was added. Seed 9379,
+// gyroscopic moments and rotor damping with
 // the balance log, no parameter at a bound: gyroscopic's p = 0.0011 (0.014
 // after Holm), predicted 12 %, nothing shortlisted, nothing added; refitted,
 // it removes 70 %). Where a bound leaves the score no power (every p-value
