@@ -3,7 +3,8 @@
 namespace coaxid {
 
 RoundChoice ChooseOfRound(const std::vector<RefitOfRound>& refits, double wald_level,
-                          double min_channels_excess, double decisive_share) {
+                          double min_channels_excess, double decisive_share,
+                          double min_share_of_excess) {
   RoundChoice c;
   for (size_t k = 0; k < refits.size(); ++k) {
     const RefitOfRound& r = refits[k];
@@ -22,8 +23,14 @@ RoundChoice ChooseOfRound(const std::vector<RefitOfRound>& refits, double wald_l
       c.dominant = i;
     }
   }
-  if (c.added >= 0 && c.dominant >= 0 &&
-      refits[c.added].share_of_all_excess < refits[c.dominant].share_of_all_excess) {
+  // The excess over all channels the best qualifying refit leaves, and how
+  // much of it the one at a bound removes.
+  const auto removes_materially_more = [&] {
+    const double left = 1 - refits[c.added].share_of_all_excess;
+    const double more = refits[c.dominant].share_of_all_excess - refits[c.added].share_of_all_excess;
+    return more > 0 && more >= min_share_of_excess * left;
+  };
+  if (c.added >= 0 && c.dominant >= 0 && removes_materially_more()) {
     c.vetoed = c.added;
     c.added = -1;
   } else {

@@ -242,7 +242,7 @@ std::vector<RefitOfRound> Judged(const RoundRefits& r, const std::vector<Candida
 void ChooseAndSay(RoundRefits* r, size_t family, std::vector<CandidateScore>* scores,
                   const DiscoveryOptions& o) {
   r->choice = ChooseOfRound(Judged(*r, *scores), WaldLevel(o, family), o.min_channels_excess,
-                            o.decisive_share_of_all_excess);
+                            o.decisive_share_of_all_excess, o.min_share_of_excess);
   if (r->choice.vetoed >= 0) {
     CandidateScore& s = (*scores)[r->shortlist[r->choice.vetoed]];
     const CandidateScore& d = (*scores)[r->shortlist[r->choice.dominant]];
@@ -317,8 +317,9 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
   r.shortlist = list.first;
   r.refits = RefitInParallel(pass, estimation, validation, now, r.shortlist, family, at_bounds,
                              scores, o, start);
-  const RoundChoice slots = ChooseOfRound(Judged(r, *scores), WaldLevel(o, family),
-                                          o.min_channels_excess, o.decisive_share_of_all_excess);
+  const RoundChoice slots =
+      ChooseOfRound(Judged(r, *scores), WaldLevel(o, family), o.min_channels_excess,
+                    o.decisive_share_of_all_excess, o.min_share_of_excess);
   if (slots.added >= 0 && !list.on_lost_channels.empty()) {
     // Measured (bench/discover_speed.sh, 41 flight-only logs): the lost
     // channels widened rounds to up to eleven refits in 15 of the logs,

@@ -18,7 +18,7 @@ CandidateScore Refitted(bool confirmed, bool plausible, double wald_p, double re
   return s;
 }
 
-constexpr double kLevel = 0.01 / 3, kMinExcess = 0.1, kDecisive = 0.9;
+constexpr double kLevel = 0.01 / 3, kMinExcess = 0.1, kDecisive = 0.9, kMinShare = 0.3;
 
 // Seed 8901 of the controllers' study, as measured: wind qualifies (27 % of
 // the excess over all channels), stabilizer_bar removes 98 % with T_b at its
@@ -29,7 +29,7 @@ TEST(ChooseOfRound, ALesserCandidateIsNotAddedBesideARefitAtABoundThatRemovesAlm
   const CandidateScore bar = Refitted(false, false, 5.9e-200, 92.8);
   const RoundChoice c =
       ChooseOfRound({{&bias, true, 0.32}, {&wind, true, 0.27}, {&bar, true, 0.98}}, kLevel,
-                    kMinExcess, kDecisive);
+                    kMinExcess, kDecisive, kMinShare);
   EXPECT_EQ(c.added, -1);
   EXPECT_EQ(c.vetoed, 1);
   EXPECT_EQ(c.dominant, 2);
@@ -40,7 +40,7 @@ TEST(ChooseOfRound, TheQualifyingRefitThatRemovesTheMostOverAllChannelsIsAdded) 
   const CandidateScore b = Refitted(true, true, 1e-9, 40);
   const CandidateScore unjudged = Refitted(true, true, 1e-9, 90);  // stopped: not judged
   const RoundChoice c = ChooseOfRound({{&a, true, 0.1}, {&b, true, 0.4}, {&unjudged, false, 0.9}},
-                                      kLevel, kMinExcess, kDecisive);
+                                      kLevel, kMinExcess, kDecisive, kMinShare);
   EXPECT_EQ(c.added, 1);
   EXPECT_EQ(c.vetoed, -1);
   EXPECT_EQ(c.dominant, -1);
@@ -54,17 +54,43 @@ TEST(ChooseOfRound, ARefitAtABoundVetoesOnlyWhenDecisiveSignificantAndLarger) {
   const CandidateScore chance = Refitted(false, false, 0.2, 95);       // Wald p above the level
   const CandidateScore smaller = Refitted(false, false, 1e-6, 95);     // 0.92, but wind 0.95
   const CandidateScore gyro = Refitted(true, true, 1e-6, 99);
-  EXPECT_EQ(ChooseOfRound({{&wind, true, 0.3}, {&weak, true, 0.85}}, kLevel, kMinExcess, kDecisive)
+  EXPECT_EQ(ChooseOfRound({{&wind, true, 0.3}, {&weak, true, 0.85}}, kLevel, kMinExcess, kDecisive, kMinShare)
                 .added, 0);
   EXPECT_EQ(ChooseOfRound({{&wind, true, 0.3}, {&chance, true, 0.95}}, kLevel, kMinExcess,
-                          kDecisive).added, 0);
+                          kDecisive, kMinShare).added, 0);
   EXPECT_EQ(ChooseOfRound({{&gyro, true, 0.95}, {&smaller, true, 0.92}}, kLevel, kMinExcess,
-                          kDecisive).added, 0);
+                          kDecisive, kMinShare).added, 0);
   // Nothing qualifies: nothing added, nothing vetoed.
-  const RoundChoice none = ChooseOfRound({{&smaller, true, 0.92}}, kLevel, kMinExcess, kDecisive);
+  const RoundChoice none = ChooseOfRound({{&smaller, true, 0.92}}, kLevel, kMinExcess, kDecisive, kMinShare);
   EXPECT_EQ(none.added, -1);
   EXPECT_EQ(none.vetoed, -1);
   EXPECT_EQ(none.dominant, -1);
+}
+
+// Seed 11114 of the confusion study (a swashplate bias alone, flight only),
+// round 1 as measured: the bias qualifies and removes 93.4 % of the excess
+// over all channels, the bar at T_b = 10 s 93.5 %: no material share of the
+// 6.6 % the bias leaves. The bias is added. Had the bar removed 98.0 %, 70 %
+// of what the bias leaves, it would veto.
+TEST(ChooseOfRound, ARefitAtABoundThatRemovesAsMuchAsTheBestQualifyingOneVetoesNothing) {
+  const CandidateScore bar = Refitted(false, false, 5.7e-42, 20.1);
+  const CandidateScore bias = Refitted(true, true, 8.0e-56, 20.0);
+  RoundChoice c = ChooseOfRound({{&bar, true, 0.935}, {&bias, true, 0.934}}, kLevel, kMinExcess,
+                                kDecisive, kMinShare);
+  EXPECT_EQ(c.added, 1);
+  EXPECT_EQ(c.vetoed, -1);
+  EXPECT_EQ(c.dominant, -1);
+  c = ChooseOfRound({{&bar, true, 0.98}, {&bias, true, 0.934}}, kLevel, kMinExcess, kDecisive,
+                    kMinShare);
+  EXPECT_EQ(c.added, -1);
+  EXPECT_EQ(c.vetoed, 1);
+  EXPECT_EQ(c.dominant, 0);
+  // The boundary: the bar removes 30 % of what the bias leaves (0.934 +
+  // 0.3 x 0.066 = 0.9538) vetoes; a little less does not.
+  EXPECT_EQ(ChooseOfRound({{&bar, true, 0.9539}, {&bias, true, 0.934}}, kLevel, kMinExcess,
+                          kDecisive, kMinShare).vetoed, 1);
+  EXPECT_EQ(ChooseOfRound({{&bar, true, 0.9535}, {&bias, true, 0.934}}, kLevel, kMinExcess,
+                          kDecisive, kMinShare).added, 1);
 }
 
 }  // namespace
