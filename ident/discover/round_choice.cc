@@ -27,7 +27,8 @@ RoundChoice ChooseOfRound(const std::vector<RefitOfRound>& refits, double wald_l
   // much of it the one at a bound removes.
   const auto removes_materially_more = [&] {
     const double left = 1 - refits[c.added].share_of_all_excess;
-    const double more = refits[c.dominant].share_of_all_excess - refits[c.added].share_of_all_excess;
+    const double more =
+        refits[c.dominant].share_of_all_excess - refits[c.added].share_of_all_excess;
     return more > 0 && more >= min_share_of_excess * left;
   };
   if (c.added >= 0 && c.dominant >= 0 && removes_materially_more()) {

@@ -54,14 +54,21 @@ TEST(ChooseOfRound, ARefitAtABoundVetoesOnlyWhenDecisiveSignificantAndLarger) {
   const CandidateScore chance = Refitted(false, false, 0.2, 95);       // Wald p above the level
   const CandidateScore smaller = Refitted(false, false, 1e-6, 95);     // 0.92, but wind 0.95
   const CandidateScore gyro = Refitted(true, true, 1e-6, 99);
-  EXPECT_EQ(ChooseOfRound({{&wind, true, 0.3}, {&weak, true, 0.85}}, kLevel, kMinExcess, kDecisive, kMinShare)
-                .added, 0);
+  EXPECT_EQ(ChooseOfRound({{&wind, true, 0.3}, {&weak, true, 0.85}}, kLevel, kMinExcess, kDecisive,
+                          kMinShare)
+                .added,
+            0);
   EXPECT_EQ(ChooseOfRound({{&wind, true, 0.3}, {&chance, true, 0.95}}, kLevel, kMinExcess,
-                          kDecisive, kMinShare).added, 0);
+                          kDecisive, kMinShare)
+                .added,
+            0);
   EXPECT_EQ(ChooseOfRound({{&gyro, true, 0.95}, {&smaller, true, 0.92}}, kLevel, kMinExcess,
-                          kDecisive, kMinShare).added, 0);
+                          kDecisive, kMinShare)
+                .added,
+            0);
   // Nothing qualifies: nothing added, nothing vetoed.
-  const RoundChoice none = ChooseOfRound({{&smaller, true, 0.92}}, kLevel, kMinExcess, kDecisive, kMinShare);
+  const RoundChoice none =
+      ChooseOfRound({{&smaller, true, 0.92}}, kLevel, kMinExcess, kDecisive, kMinShare);
   EXPECT_EQ(none.added, -1);
   EXPECT_EQ(none.vetoed, -1);
   EXPECT_EQ(none.dominant, -1);
