@@ -131,7 +131,7 @@ OutputErrorResult RestartedOffBounds(const Vehicle& model, const Vehicle& declar
     OutputErrorOptions worker_options;
     const int workers = SideBySideWorkers(n, fit_options, &worker_options);
     std::vector<OutputErrorResult> done(n);
-    SideBySide(n, workers, [&](int k) {
+    SideBySide(n, workers, worker_options, [&](int k) {
       Vehicle restarted = model;
       restarted.parameters = fit.parameters;
       for (const auto& [name, config] : batch[k]) restarted.parameters.SetValue(name, config);

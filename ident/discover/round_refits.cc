@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <memory>
 #include <thread>
 
 #include "core/report_values.h"
@@ -24,13 +25,20 @@ int SideBySideWorkers(int n, const OutputErrorOptions& fit, OutputErrorOptions* 
   *worker = fit;
   worker->progress = nullptr;
   worker->num_threads = std::max(1, fit.num_threads / workers);
+  // One worker is the calling thread: it keeps the pool it was lent from.
+  if (workers > 1) worker->spare_threads = std::make_shared<SpareThreads>();
   return workers;
 }
 
-void SideBySide(int n, int workers, const std::function<void(int)>& task) {
+void SideBySide(int n, int workers, const OutputErrorOptions& worker_options,
+                const std::function<void(int)>& task) {
   std::atomic<int> next{0};
   auto worker = [&] {
     for (int k = next++; k < n; k = next++) task(k);
+    // Out of tasks: its threads go to the fits still running (one worker
+    // alone is the caller, which goes on).
+    if (workers > 1 && worker_options.spare_threads)
+      worker_options.spare_threads->Add(worker_options.num_threads);
   };
   std::vector<std::thread> threads;
   for (int w = 1; w < workers; ++w) threads.emplace_back(worker);
@@ -173,7 +181,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     evaluate(k);
     refits[k].seconds = SecondsSince(t0);
   };
-  SideBySide(n, workers, [&](int k) {
+  SideBySide(n, workers, fit, [&](int k) {
     if (k <= decided_by.load()) one(k);
   });
   for (int k = 0; k < n; ++k) {

@@ -23,12 +23,16 @@ using DiscoveryClock = std::chrono::steady_clock;
 void Say(const DiscoveryOptions& o, const std::string& line);
 
 // task(0) ... task(n - 1), each once, on `workers` threads (this one among
-// them), taken in order as threads come free.
-void SideBySide(int n, int workers, const std::function<void(int)>& task);
+// them), taken in order as threads come free. A worker that finds no task
+// left adds its worker_options.num_threads to worker_options.spare_threads,
+// where the fits still running borrow them.
+void SideBySide(int n, int workers, const OutputErrorOptions& worker_options,
+                const std::function<void(int)>& task);
 
 // How n fits run side by side on fit.num_threads threads: the number of
 // workers (at most n), and in *worker each one's fit options, its share of
-// the threads, silent (the loop reports each result).
+// the threads and the pool the workers' threads go to as they finish
+// (spare_threads.h), silent (the loop reports each result).
 int SideBySideWorkers(int n, const OutputErrorOptions& fit, OutputErrorOptions* worker);
 
 // The held-out side of a snapshot (nothing without held-out logs).

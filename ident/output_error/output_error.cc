@@ -179,7 +179,8 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
   Assembly a;
   ceres::Problem::Options problem_options;
   problem_options.enable_fast_removal = false;
-  a.evaluation = std::make_unique<ParallelSegmentEvaluation>(options.num_threads);
+  a.evaluation =
+      std::make_unique<ParallelSegmentEvaluation>(options.num_threads, options.spare_threads);
   problem_options.evaluation_callback = a.evaluation.get();
   a.problem = std::make_unique<ceres::Problem>(problem_options);
   a.problem->AddParameterBlock(theta_scaled, free.size());

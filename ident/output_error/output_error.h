@@ -14,6 +14,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,7 @@
 #include "ident/estimation_log.h"
 #include "ident/identifiability.h"
 #include "ident/noise_weights.h"
+#include "ident/output_error/spare_threads.h"
 #include "ident/parameter_prior.h"
 #include "ident/scale_gauge.h"
 
@@ -110,6 +112,9 @@ struct OutputErrorOptions {
   // on the integrator's steps (bench/experiments/simulation/flight_bench).
   SensitivityMethod sensitivity_method = SensitivityMethod::kRungeKuttaPerHold;
   int num_threads = 2;
+  // Threads that fits side by side with this one have finished with, lent
+  // to its segment evaluations (spare_threads.h); nullptr: none.
+  std::shared_ptr<SpareThreads> spare_threads;
   int balance_rows_per_block = 512;
   // Ceres stopping rules. A relative cost change of 1e-7 is far below what one
   // standard deviation of any parameter changes the cost by (0.5 / cost).

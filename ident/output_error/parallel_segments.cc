@@ -16,7 +16,10 @@ void ParallelSegmentEvaluation::PrepareForEvaluation(bool evaluate_jacobians,
                                                      bool /*new_evaluation_point*/) {
   // Each block keeps its last point and skips one it already holds, so a
   // repeated point costs a comparison.
-  const int workers = std::min<int>(num_threads_, static_cast<int>(blocks_.size()));
+  const int blocks = static_cast<int>(blocks_.size());
+  const int own = std::min(num_threads_, blocks);
+  const int borrowed = spare_ ? spare_->Borrow(blocks - own) : 0;
+  const int workers = own + borrowed;
   if (workers < 2) return;  // Ceres evaluates them itself, in order
   std::atomic<size_t> next{0};
   auto work = [&] {
@@ -28,6 +31,7 @@ void ParallelSegmentEvaluation::PrepareForEvaluation(bool evaluate_jacobians,
   for (int t = 1; t < workers; ++t) threads.emplace_back(work);
   work();
   for (std::thread& t : threads) t.join();
+  if (borrowed > 0) spare_->Return(borrowed);
 }
 
 }  // namespace coaxid

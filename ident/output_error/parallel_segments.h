@@ -14,17 +14,22 @@
 // them in its own fixed order (CompressedSegmentCost::Prepare).
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include <ceres/evaluation_callback.h>
 
 #include "ident/output_error/compressed_segment_cost.h"
+#include "ident/output_error/spare_threads.h"
 
 namespace coaxid {
 
 class ParallelSegmentEvaluation : public ceres::EvaluationCallback {
  public:
-  explicit ParallelSegmentEvaluation(int num_threads) : num_threads_(num_threads) {}
+  // num_threads of its own, and for each evaluation whatever `spare` has
+  // idle (nullptr: none).
+  explicit ParallelSegmentEvaluation(int num_threads, std::shared_ptr<SpareThreads> spare = nullptr)
+      : num_threads_(num_threads), spare_(std::move(spare)) {}
 
   // A segment's residual block and its parameter blocks, as given to Ceres
   // (they must outlive this).
@@ -38,6 +43,7 @@ class ParallelSegmentEvaluation : public ceres::EvaluationCallback {
     std::vector<double*> parameters;
   };
   int num_threads_;
+  std::shared_ptr<SpareThreads> spare_;
   std::vector<Block> blocks_;
 };
 

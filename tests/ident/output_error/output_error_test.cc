@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <map>
+#include <memory>
 #include <random>
 #include <string>
 
@@ -231,6 +232,31 @@ TEST(OutputError, TheFitIsTheSameOnOneThreadAndOnThree) {
     ASSERT_EQ(a.rows(), b.rows());
     ASSERT_EQ(a.cols(), b.cols());
     EXPECT_TRUE(((a == b) || (a.isNaN() && b.isNaN())).all()) << "log " << k;
+  }
+}
+
+// Threads lent by fits that finished (spare_threads.h) speed a fit up and
+// change nothing in it: one thread of its own plus two borrowed gives the
+// one-thread fit bit for bit, and the threads go back to the pool.
+TEST(OutputError, BorrowedThreadsChangeNothingInTheFit) {
+  const Vehicle nominal = Nominal();
+  const Vehicle truth = MakeTruthVehicle(nominal.config, TruthScenario());
+  const Vehicle start = StartOff(nominal, truth, 1.3);
+  const std::vector<EstimationLog> logs = {MakeEstimationLog(FlightLog(truth, 3.0, 33, true))};
+  OutputErrorOptions options = FastOptions();
+  options.num_threads = 1;
+  const OutputErrorResult alone = FitOutputError(start, logs, options);
+  options.spare_threads = std::make_shared<SpareThreads>();
+  options.spare_threads->Add(2);
+  const OutputErrorResult lent = FitOutputError(start, logs, options);
+  ASSERT_TRUE(alone.usable) << alone.why_not_usable;
+  ASSERT_TRUE(lent.usable) << lent.why_not_usable;
+  EXPECT_GT(options.spare_threads->lent(), 0);
+  EXPECT_EQ(options.spare_threads->idle(), 2);
+  EXPECT_EQ(alone.iterations, lent.iterations);
+  EXPECT_EQ(alone.final_cost, lent.final_cost);
+  for (int i : start.parameters.FreeIndices()) {
+    EXPECT_EQ(alone.parameters[i].value, lent.parameters[i].value) << start.parameters[i].name;
   }
 }
 
