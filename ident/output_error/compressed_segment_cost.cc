@@ -10,6 +10,42 @@ namespace {
 using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 }  // namespace
 
+CompressedRows CompressRows(const Eigen::MatrixXd& A, const Eigen::VectorXd& r) {
+  const int n = static_cast<int>(A.cols());
+  CompressedRows c;
+  thread_local Eigen::MatrixXd N;
+  N.setZero(n, n);
+  N.selfadjointView<Eigen::Upper>().rankUpdate(A.transpose());  // A^T A, one blocked pass
+  const Eigen::VectorXd g = A.transpose() * r;
+  // N = R^T R, row by row; a column within kDependentColumn of the span of
+  // the ones before it (a parameter the segment does not see: a zero column)
+  // gets a zero row, and head = R^-T g nothing along it.
+  c.R.setZero(n, n);
+  c.head.setZero(n);
+  for (int i = 0; i < n; ++i) {
+    const double d = N(i, i) - c.R.col(i).head(i).squaredNorm();
+    if (!(d > kDependentColumn * N(i, i))) continue;
+    const double rii = std::sqrt(d);
+    c.R(i, i) = rii;
+    for (int j = i + 1; j < n; ++j) {
+      c.R(i, j) = (N(i, j) - c.R.col(i).head(i).dot(c.R.col(j).head(i))) / rii;
+    }
+    c.head[i] = (g[i] - c.R.col(i).head(i).dot(c.head.head(i))) / rii;
+  }
+  const double r2 = r.squaredNorm(), rest2 = r2 - c.head.squaredNorm();
+  if (c.R.allFinite() && c.head.allFinite() && rest2 >= kMinUnexplainedShare * r2) {
+    c.rest = std::sqrt(rest2);
+    c.by_cholesky = true;
+    return c;
+  }
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
+  const Eigen::VectorXd qtr = qr.householderQ().adjoint() * r;
+  c.head = qtr.head(n);
+  c.rest = qtr.tail(A.rows() - n).norm();  // |Q2^T r|
+  c.R = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
+  return c;
+}
+
 CompressedSegmentCost::CompressedSegmentCost(std::unique_ptr<FlightSegmentCost> segment)
     : segment_(std::move(segment)) {
   const int P = segment_->parameter_block_sizes()[1];
@@ -72,16 +108,16 @@ bool CompressedSegmentCost::EvaluateKept(double const* const* parameters) const 
   r.resize(m);
   double* full[] = {J_state.data(), J_theta.data(), has_next ? J_next.data() : nullptr};
   if (!segment_->Evaluate(parameters, r.data(), full)) return false;
-  Eigen::MatrixXd A(m_out, n_);
+  thread_local Eigen::MatrixXd A;
+  A.resize(m_out, n_);
   A.leftCols(states_) = J_state.topRows(m_out);
   A.rightCols(P) = J_theta.topRows(m_out);
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
-  const Eigen::VectorXd qtr = qr.householderQ().adjoint() * r.head(m_out);
+  CompressedRows rows = CompressRows(A, r.head(m_out));
   kept_.residuals.resize(num_residuals());
-  kept_.residuals.head(n_) = qtr.head(n_);
-  kept_.residuals[n_] = qtr.tail(m_out - n_).norm();  // |Q2^T r|
+  kept_.residuals.head(n_) = rows.head;
+  kept_.residuals[n_] = rows.rest;
   kept_.residuals.tail(continuity) = r.tail(continuity);
-  kept_.R = qr.matrixQR().topRows(n_).triangularView<Eigen::Upper>();
+  kept_.R = std::move(rows.R);
   kept_.continuity_state = J_state.bottomRows(continuity);
   kept_.continuity_theta = J_theta.bottomRows(continuity);
   kept_.continuity_next =

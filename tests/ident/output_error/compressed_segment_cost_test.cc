@@ -2,9 +2,12 @@
 // and normal equations (J^T J, J^T r); the output-error tests fit through it.
 #include "ident/output_error/compressed_segment_cost.h"
 
+#include <cmath>
 #include <memory>
+#include <random>
 #include <thread>
 
+#include <Eigen/QR>
 #include <gtest/gtest.h>
 
 #include "experiments/simulation/simulate_experiment.h"
@@ -94,6 +97,78 @@ TEST(CompressedSegmentCost, GivesTheFullBlocksNormalEquationsAndCost) {
   ASSERT_TRUE(compressed.Evaluate(parameters, r.data(), nullptr));
   ASSERT_TRUE(full->Evaluate(parameters, r_full.data(), nullptr));
   EXPECT_NEAR(r.squaredNorm(), r_full.squaredNorm(), 1e-12 * r_full.squaredNorm());
+}
+
+// Standard normal entries.
+Eigen::MatrixXd Gaussian(int rows, int cols, std::mt19937* rng) {
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd A(rows, cols);
+  for (int j = 0; j < cols; ++j) {
+    for (int i = 0; i < rows; ++i) A(i, j) = normal(*rng);
+  }
+  return A;
+}
+
+// The compression itself (CompressRows), on a segment's shape (3000 rows,
+// 24 columns) with columns scaled over six decades as a fit's are: by
+// Cholesky, the Householder QR's R^T R, A^T r and |r| to round-off, and the
+// same |Q1^T r| entries and |Q2^T r| as the QR (R's rows differ only by
+// sign).
+TEST(CompressRows, ByCholeskyGivesTheHouseholderQrsBlock) {
+  std::mt19937 rng(11);
+  const int m = 3000, n = 24;
+  Eigen::MatrixXd A = Gaussian(m, n, &rng);
+  for (int j = 0; j < n; ++j) A.col(j) *= std::pow(10.0, -3.0 + 6.0 * j / (n - 1));
+  Eigen::VectorXd r = Gaussian(m, 1, &rng);
+  r += A * Eigen::VectorXd::Constant(n, 0.3);  // half explained by the columns
+  const CompressedRows c = CompressRows(A, r);
+  ASSERT_TRUE(c.by_cholesky);
+  const Eigen::MatrixXd H = A.transpose() * A, H_c = c.R.transpose() * c.R;
+  const Eigen::VectorXd g = A.transpose() * r, g_c = c.R.transpose() * c.head;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {  // relative to the entry's own scale
+      EXPECT_NEAR(H_c(i, j), H(i, j), 1e-12 * std::sqrt(H(i, i) * H(j, j))) << i << ", " << j;
+    }
+    EXPECT_NEAR(g_c[i], g[i], 1e-12 * std::sqrt(H(i, i)) * r.norm()) << i;
+  }
+  EXPECT_NEAR(c.head.squaredNorm() + c.rest * c.rest, r.squaredNorm(), 1e-12 * r.squaredNorm());
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
+  const Eigen::VectorXd qtr = qr.householderQ().adjoint() * r;
+  EXPECT_NEAR(c.rest, qtr.tail(m - n).norm(), 1e-10 * r.norm());
+  for (int i = 0; i < n; ++i) EXPECT_NEAR(std::abs(c.head[i]), std::abs(qtr[i]), 1e-9 * r.norm());
+}
+
+// A column with no effect on the outputs (a parameter its segment does not
+// see) or one the others give exactly: a zero row of R, nothing of r along
+// it. Residuals the columns explain exactly (noise-free, |Q2^T r| = 0),
+// where |r|^2 - |Q1^T r|^2 would be round-off: by Householder QR.
+TEST(CompressRows, DependentColumnsAndResidualsExplainedExactly) {
+  std::mt19937 rng(12);
+  const int m = 400, n = 10;
+  const Eigen::MatrixXd A = Gaussian(m, n, &rng);
+  const Eigen::VectorXd r = Gaussian(m, 1, &rng);
+
+  Eigen::MatrixXd dependent = A;
+  dependent.col(4).setZero();
+  dependent.col(7) = 2.0 * dependent.col(1) - dependent.col(3);
+  const CompressedRows a = CompressRows(dependent, r);
+  EXPECT_TRUE(a.by_cholesky);
+  EXPECT_EQ(a.R.row(4).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LT(a.R.row(7).cwiseAbs().maxCoeff(), 1e-6);
+  const Eigen::MatrixXd H = dependent.transpose() * dependent;
+  EXPECT_LT((a.R.transpose() * a.R - H).cwiseAbs().maxCoeff(), 1e-10 * H.cwiseAbs().maxCoeff());
+  const Eigen::VectorXd g = dependent.transpose() * r;
+  EXPECT_LT((a.R.transpose() * a.head - g).cwiseAbs().maxCoeff(), 1e-10 * g.cwiseAbs().maxCoeff());
+  EXPECT_NEAR(a.head.squaredNorm() + a.rest * a.rest, r.squaredNorm(), 1e-12 * r.squaredNorm());
+  // rest: r's distance to the columns' span (a rank-revealing least squares).
+  const Eigen::VectorXd x = dependent.colPivHouseholderQr().solve(r);
+  EXPECT_NEAR(a.rest, (r - dependent * x).norm(), 1e-10 * r.norm());
+
+  const Eigen::VectorXd explained = A * Eigen::VectorXd::LinSpaced(n, -1.0, 1.0);
+  const CompressedRows b = CompressRows(A, explained);
+  EXPECT_FALSE(b.by_cholesky);
+  EXPECT_LT(b.rest, 1e-12 * explained.norm());
+  EXPECT_NEAR(b.head.norm(), explained.norm(), 1e-12 * explained.norm());
 }
 
 // What ParallelSegmentEvaluation relies on: a block prepared at a point (on
