@@ -48,7 +48,7 @@ struct CompressedRows {
   Eigen::MatrixXd R;
   bool by_cholesky = false;
 };
-inline constexpr double kDependentColumn = 1e-12;     // 100 x the pivots' round-off
+inline constexpr double kDependentColumn = 1e-12;  // well above the pivots' round-off, n eps
 inline constexpr double kMinUnexplainedShare = 1e-8;  // of |r|^2
 CompressedRows CompressRows(const Eigen::MatrixXd& A, const Eigen::VectorXd& r);
 
