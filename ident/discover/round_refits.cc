@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <map>
@@ -102,10 +103,18 @@ std::string WhyNotConfirmed(const CandidateScore& s, double level, const Discove
 
 namespace {
 
+std::vector<RefitOfRound> Judged(const std::vector<CandidateRefit>& refits,
+                                 const std::vector<int>& shortlist,
+                                 const std::vector<CandidateScore>& scores, size_t count);
+
 // Refits the shortlisted candidates side by side and judges each: Wald p
 // below alpha over the `family` of refits (Bonferroni), no parameter at a bound,
 // and at least min_share_of_excess of its channels' excess error removed on
-// the estimation data and on the held-out data.
+// the estimation data and on the held-out data. Those from `waits_from` on
+// count only if the round adds none of those before them (ChooseOfRound);
+// they take the threads the others leave free, stop once one of those
+// qualifies, and are refitted again if that one is not added after all (a
+// veto), so the outcome does not depend on the timing.
 std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
                                             const std::vector<EstimationLog>& estimation,
                                             const std::vector<EstimationLog>& validation,
@@ -113,8 +122,10 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
                                             size_t family,
                                             const std::map<std::string, double>& declared_at_bounds,
                                             std::vector<CandidateScore>* scores,
-                                            const DiscoveryOptions& o, DiscoveryClock::time_point start) {
+                                            const DiscoveryOptions& o, DiscoveryClock::time_point start,
+                                            size_t waits_from = SIZE_MAX) {
   const int n = static_cast<int>(shortlist.size());
+  const int waiting = static_cast<int>(std::min<size_t>(waits_from, shortlist.size()));
   std::vector<CandidateRefit> refits(n);
   if (n == 0) return refits;
   std::string names;
@@ -136,14 +147,21 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   // fields (its estimates, rss_after) at whatever point it stopped.
   std::vector<CandidateScore> as_scored;
   for (int k : shortlist) as_scored.push_back((*scores)[k]);
+  // One of those before `waiting` qualifies: the waiting ones stop.
+  std::atomic<bool> one_before_qualifies{false};
+  std::vector<char> finished(n, 0);  // ran to its end, stopped by nothing
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
     OutputErrorResult refit;
     OutputErrorOptions fit_k = fit;
-    fit_k.stop_requested = [&decided_by, k] { return decided_by.load() < k; };
+    fit_k.stop_requested = [&decided_by, &one_before_qualifies, k, waiting] {
+      return decided_by.load() < k || (k >= waiting && one_before_qualifies.load());
+    };
     const bool usable = RefitCandidate(pass, estimation, fit_k, declared_at_bounds, &s, &refit,
                                        &refits[k].next);
-    if (!usable || fit_k.stop_requested()) return;  // stopped: set aside below, unjudged
+    if (fit_k.stop_requested()) return;  // stopped: set aside below, unjudged
+    finished[k] = 1;
+    if (!usable) return;
     Vehicle v = refits[k].next.fitted;
     refits[k].snapshot = Snapshot(v, refit, estimation, {}, o);
     const ExcessShare est = ShareOfExcessRemoved(now.fit, refits[k].snapshot.fit,
@@ -170,6 +188,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
               .share;
     }
     refits[k].ok = true;
+    if (k < waiting && WhyNotConfirmed(s, level, o).empty()) one_before_qualifies = true;
     if (all.share >= o.decisive_share_of_all_excess && WhyNotConfirmed(s, level, o).empty()) {
       int d = decided_by.load();
       while (k < d && !decided_by.compare_exchange_weak(d, k)) {  // the lowest k decides
@@ -182,10 +201,57 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     refits[k].seconds = SecondsSince(t0);
   };
   SideBySide(n, workers, fit, [&](int k) {
-    if (k <= decided_by.load()) one(k);
+    if (k <= decided_by.load() && !(k >= waiting && one_before_qualifies.load())) one(k);
   });
+  // The waiting ones: set aside if the round adds one of those before them;
+  // otherwise those a qualifying one stopped (then vetoed) are refitted now.
+  const size_t judged_before = static_cast<size_t>(std::min(waiting, decided_by.load() + 1));
+  for (size_t k = 0; k < judged_before; ++k) {
+    CandidateScore& s = (*scores)[shortlist[k]];
+    if (refits[k].ok) s.confirmed = WhyNotConfirmed(s, level, o).empty();
+  }
+  const RoundChoice before =
+      ChooseOfRound(Judged(refits, shortlist, *scores, judged_before), level,
+                    o.min_channels_excess, o.decisive_share_of_all_excess, o.min_share_of_excess);
+  std::vector<char> set_aside(n, 0), reported(n, 0);
+  if (waiting < n && before.added >= 0) {
+    const std::string& effect = (*scores)[shortlist[before.added]].effect;
+    for (int k = waiting; k < n; ++k) {
+      CandidateScore& s = (*scores)[shortlist[k]];
+      s = as_scored[k];
+      s.refitted = false;
+      s.refit_starts.clear();
+      s.confirmed = false;
+      s.why_not_confirmed = "not refitted: " + effect +
+                            ", refitted before it, qualifies; the next round tests it against "
+                            "the model with " + effect;
+      refits[k] = CandidateRefit();
+      set_aside[k] = 1;
+    }
+  } else if (waiting < n) {
+    std::vector<int> again;
+    for (int k = waiting; k < n; ++k) {
+      if (finished[k] || k > decided_by.load()) continue;
+      (*scores)[shortlist[k]] = as_scored[k];  // a stopped refit wrote part of it
+      again.push_back(shortlist[k]);
+    }
+    if (!again.empty()) {
+      std::vector<CandidateRefit> redone = RefitInParallel(
+          pass, estimation, validation, now, again, family, declared_at_bounds, scores, o, start);
+      for (int k = waiting, j = 0; k < n; ++k) {
+        if (finished[k] || k > decided_by.load()) continue;
+        refits[k] = std::move(redone[j++]);
+        reported[k] = 1;
+      }
+    }
+  }
   for (int k = 0; k < n; ++k) {
     CandidateScore& s = (*scores)[shortlist[k]];
+    if (reported[k]) continue;
+    if (set_aside[k]) {
+      Say(o, "  refit " + s.effect + ": " + s.why_not_confirmed);
+      continue;
+    }
     const int decider = decided_by.load();
     if (k > decider) {
       const std::string& effect = (*scores)[shortlist[decider]].effect;
@@ -236,13 +302,19 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
 }
 
 
-// The round's refits as ChooseOfRound reads them.
-std::vector<RefitOfRound> Judged(const RoundRefits& r, const std::vector<CandidateScore>& scores) {
+// The first `count` of a round's refits as ChooseOfRound reads them.
+std::vector<RefitOfRound> Judged(const std::vector<CandidateRefit>& refits,
+                                 const std::vector<int>& shortlist,
+                                 const std::vector<CandidateScore>& scores, size_t count) {
   std::vector<RefitOfRound> judged;
-  for (size_t k = 0; k < r.refits.size(); ++k) {
-    judged.push_back({&scores[r.shortlist[k]], r.refits[k].ok, r.refits[k].share_of_all_excess});
+  for (size_t k = 0; k < std::min(count, refits.size()); ++k) {
+    judged.push_back({&scores[shortlist[k]], refits[k].ok, refits[k].share_of_all_excess});
   }
   return judged;
+}
+
+std::vector<RefitOfRound> Judged(const RoundRefits& r, const std::vector<CandidateScore>& scores) {
+  return Judged(r.refits, r.shortlist, scores, r.refits.size());
 }
 
 // What the round adds of r's refits, at the Wald level of `family`; a
@@ -323,8 +395,9 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
       ConfigValuesOfSymptomaticParameters(pass.fit.parameters, declared);
   RoundRefits r;
   r.shortlist = list.first;
+  r.shortlist.insert(r.shortlist.end(), list.after_passing.begin(), list.after_passing.end());
   r.refits = RefitInParallel(pass, estimation, validation, now, r.shortlist, family, at_bounds,
-                             scores, o, start);
+                             scores, o, start, list.first.size());
   const RoundChoice slots =
       ChooseOfRound(Judged(r, *scores), WaldLevel(o, family), o.min_channels_excess,
                     o.decisive_share_of_all_excess, o.min_share_of_excess);

@@ -82,9 +82,11 @@ struct RoundRefits {
 // Shortlists the candidates of `*scores` (none of `excluded`), restarting the
 // declared parameters (config values in `declared`) that the current fit
 // left at a bound or far outside their range, refits them side by side
-// against `now` and chooses (ChooseOfRound). Those beyond the slots on the
-// channels the fit has lost (RoundShortlist::on_lost_channels) are refitted
-// only when none of the others is added. Fills the scores' refit fields.
+// against `now` and chooses (ChooseOfRound). The slots' symptomatic ones
+// (RoundShortlist::after_passing), then those beyond the slots on the
+// channels the fit has lost (RoundShortlist::on_lost_channels), are refitted
+// only when none of those refitted before them is added. Fills the scores'
+// refit fields.
 RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now,
                              const Vehicle& declared, const std::vector<std::string>& excluded,
                              const std::vector<EstimationLog>& estimation,

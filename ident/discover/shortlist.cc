@@ -7,6 +7,7 @@ namespace coaxid {
 
 std::vector<int> RoundShortlist::All() const {
   std::vector<int> all = first;
+  all.insert(all.end(), after_passing.begin(), after_passing.end());
   all.insert(all.end(), on_lost_channels.begin(), on_lost_channels.end());
   return all;
 }
@@ -56,7 +57,8 @@ RoundShortlist Shortlist(const std::vector<CandidateScore>& scores,
   take(promising, at_most > out.size() ? at_most - out.size() : 0, &out);
   // The most significant by its score test (uncorrected), when the shares
   // left it out.
-  if (most_significant >= 0 && scores[most_significant].p_value < alpha &&
+  const bool significant = most_significant >= 0 && scores[most_significant].p_value < alpha;
+  if (significant &&
       std::find(out.begin(), out.end(), most_significant) == out.end()) {
     out.push_back(most_significant);
   }
@@ -68,7 +70,14 @@ RoundShortlist Shortlist(const std::vector<CandidateScore>& scores,
       list.on_lost_channels.push_back(k);
     }
   }
-  list.first = std::move(out);
+  // The slots' symptomatic ones wait for the passing ones' refits, when
+  // there are any.
+  for (int k : out) {
+    const bool waits = !passing.empty() &&
+                       std::find(symptomatic.begin(), symptomatic.end(), k) != symptomatic.end() &&
+                       !(significant && k == most_significant);
+    (waits ? list.after_passing : list.first).push_back(k);
+  }
   return list;
 }
 

@@ -4,7 +4,7 @@
 // group capped and ranked by the linearised share, where a share above 1
 // from a step beyond the candidate's bounds (a failed linearisation) ranks
 // last; the most significant by its score test, below alpha before Holm, is
-// refitted too.
+// refitted too. The symptomatic ones wait for the passing ones' refits.
 #include "ident/discover/shortlist.h"
 
 #include <string>
@@ -209,6 +209,24 @@ TEST(Shortlist, PassingFirstThenAtBoundsThenPromisingEachCapped) {
   // promising (share >= 0.15): none left under the cap of 3 in all.
   EXPECT_EQ(Names(scores, Shortlist(scores, {"w"}, {}, 3, 0.3, 0.01).All()),
             (std::vector<std::string>{"a", "b", "c", "h", "e"}));
+  // e, failing and shortlisted for acting on the distorted w, waits for the
+  // passing ones' refits; the blind h does not.
+  const RoundShortlist split = Shortlist(scores, {"w"}, {}, 3, 0.3, 0.01);
+  EXPECT_EQ(Names(scores, split.first), (std::vector<std::string>{"a", "b", "c", "h"}));
+  EXPECT_EQ(Names(scores, split.after_passing), (std::vector<std::string>{"e"}));
+  // The most significant by its score test, below alpha, does not wait.
+  std::vector<CandidateScore> significant = scores;
+  significant[4].p_value = 0.001;
+  const RoundShortlist e_first = Shortlist(significant, {"w"}, {}, 3, 0.3, 0.01);
+  EXPECT_EQ(Names(significant, e_first.first),
+            (std::vector<std::string>{"a", "b", "c", "h", "e"}));
+  EXPECT_TRUE(e_first.after_passing.empty());
+  // With none passing, nothing waits.
+  const std::vector<CandidateScore> failing = {Score("e", 0.4, false, {"w"}), Score("f", 0.6),
+                                               Score("h", 0.7, false, {"u"}, true)};
+  const RoundShortlist none_pass = Shortlist(failing, {"w"}, {}, 3, 0.3, 0.01);
+  EXPECT_EQ(Names(failing, none_pass.first), (std::vector<std::string>{"h", "e", "f"}));
+  EXPECT_TRUE(none_pass.after_passing.empty());
   // No parameter at a bound: f (0.6) is promising, g (0.1) is not; removed
   // effects never come back.
   const std::vector<CandidateScore> few = {Score("a", 0.5, true), Score("f", 0.6),
