@@ -203,6 +203,15 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   SideBySide(n, workers, fit, [&](int k) {
     if (k <= decided_by.load() && !(k >= waiting && one_before_qualifies.load())) one(k);
   });
+  // Refit k's score back as scored, with why it is not judged.
+  auto set_back = [&](int k, const std::string& why) {
+    CandidateScore& s = (*scores)[shortlist[k]];
+    s = as_scored[k];
+    s.refitted = false;
+    s.refit_starts.clear();
+    s.confirmed = false;
+    s.why_not_confirmed = why;
+  };
   // The waiting ones: set aside if the round adds one of those before them;
   // otherwise those a qualifying one stopped (then vetoed) are refitted now.
   const size_t judged_before = static_cast<size_t>(std::min(waiting, decided_by.load() + 1));
@@ -217,14 +226,9 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   if (waiting < n && before.added >= 0) {
     const std::string& effect = (*scores)[shortlist[before.added]].effect;
     for (int k = waiting; k < n; ++k) {
-      CandidateScore& s = (*scores)[shortlist[k]];
-      s = as_scored[k];
-      s.refitted = false;
-      s.refit_starts.clear();
-      s.confirmed = false;
-      s.why_not_confirmed = "not refitted: " + effect +
-                            ", refitted before it, qualifies; the next round tests it against "
-                            "the model with " + effect;
+      set_back(k, "not refitted: " + effect +
+                  ", refitted before it, qualifies; the next round tests it against the "
+                  "model with " + effect);
       refits[k] = CandidateRefit();
       set_aside[k] = 1;
     }
@@ -255,15 +259,10 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     const int decider = decided_by.load();
     if (k > decider) {
       const std::string& effect = (*scores)[shortlist[decider]].effect;
-      s = as_scored[k];
-      s.refitted = false;
-      s.refit_starts.clear();
-      s.confirmed = false;
-      s.why_not_confirmed =
-          "not judged: " + effect + ", ranked above it, qualifies and removes " +
-          NumberText(100 * refits[decider].share_of_all_excess, "%.0f") +
-          " % of the excess error over all channels; the next round tests it against the model "
-          "with " + effect;
+      set_back(k, "not judged: " + effect + ", ranked above it, qualifies and removes " +
+                  NumberText(100 * refits[decider].share_of_all_excess, "%.0f") +
+                  " % of the excess error over all channels; the next round tests it "
+                  "against the model with " + effect);
       refits[k].ok = false;
       Say(o, "  refit " + s.effect + ": " + s.why_not_confirmed);
       continue;
