@@ -150,13 +150,16 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   // One of those before `waiting` qualifies: the waiting ones stop.
   std::atomic<bool> one_before_qualifies{false};
   std::vector<char> finished(n, 0);  // ran to its end, stopped by nothing
+  // Refit k is not needed (any more): ranked below a decisive one, or waiting
+  // behind one that qualifies.
+  auto not_needed = [&decided_by, &one_before_qualifies, waiting](int k) {
+    return decided_by.load() < k || (k >= waiting && one_before_qualifies.load());
+  };
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
     OutputErrorResult refit;
     OutputErrorOptions fit_k = fit;
-    fit_k.stop_requested = [&decided_by, &one_before_qualifies, k, waiting] {
-      return decided_by.load() < k || (k >= waiting && one_before_qualifies.load());
-    };
+    fit_k.stop_requested = [&not_needed, k] { return not_needed(k); };
     const bool usable = RefitCandidate(pass, estimation, fit_k, declared_at_bounds, &s, &refit,
                                        &refits[k].next);
     if (fit_k.stop_requested()) return;  // stopped: set aside below, unjudged
@@ -201,7 +204,7 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     refits[k].seconds = SecondsSince(t0);
   };
   SideBySide(n, workers, fit, [&](int k) {
-    if (k <= decided_by.load() && !(k >= waiting && one_before_qualifies.load())) one(k);
+    if (!not_needed(k)) one(k);
   });
   // Refit k's score back as scored, with why it is not judged.
   auto set_back = [&](int k, const std::string& why) {
