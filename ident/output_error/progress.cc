@@ -44,10 +44,10 @@ ceres::CallbackReturnType OutputErrorProgress::operator()(const ceres::Iteration
   if (!print_) return ceres::SOLVER_CONTINUE;
   char line[320];
   int n = std::snprintf(line, sizeof line,
-                        "%s: iteration %2d  cost %.6e  |step| %.2e  elapsed %.1f s  (%.1f s, "
-                        "%.0f rows/s)",
-                        stage_.c_str(), s.iteration, s.cost, s.step_norm, SecondsSince(start_),
-                        s.iteration_time_in_seconds,
+                        "%s: iteration %2d  cost %.6e  |step| %.2e  tr_radius %.1e  tr_ratio %.2f  "
+                        "elapsed %.1f s  (%.1f s, %.0f rows/s)",
+                        stage_.c_str(), s.iteration, s.cost, s.step_norm, s.trust_region_radius,
+                        s.relative_decrease, SecondsSince(start_), s.iteration_time_in_seconds,
                         rows_ / std::max(s.iteration_time_in_seconds, 1e-9));
   if (left > 0 && n > 0 && n < static_cast<int>(sizeof line)) {
     std::snprintf(line + n, sizeof line - n,

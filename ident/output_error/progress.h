@@ -1,5 +1,9 @@
 // The output-error fit's progress lines (one per Ceres iteration, on stderr
-// through OutputErrorOptions::progress): cost, step, elapsed time, rows per
+// through OutputErrorOptions::progress): cost, step, the trust region's
+// radius and its ratio of actual to predicted cost decrease (Ceres'
+// tr_radius and tr_ratio: a ratio that stays well below 1 while the radius
+// stays wide open is a Gauss-Newton model that keeps overrating its steps,
+// the crawl of a fit along a misfit), elapsed time, rows per
 // second, and the time the stage has left at its present rate of convergence;
 // it also stops the solve when its owner asks (OutputErrorOptions::stop_requested).
 #pragma once

@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <string>
 
 namespace coaxid {
 namespace {
@@ -27,6 +29,24 @@ TEST(IterationsLeftAtLinearRate, CountsTheDropsAboveTheStop) {
   EXPECT_EQ(IterationsLeftAtLinearRate(0, 10, 1e6, 1e-7), -1);    // no previous drop
   EXPECT_EQ(IterationsLeftAtLinearRate(10, 20, 1e6, 1e-7), -1);   // not converging
   EXPECT_EQ(IterationsLeftAtLinearRate(10, -1, 1e6, 1e-7), -1);   // a rejected step
+}
+
+TEST(OutputErrorProgress, PrintsTheTrustRegionBesideTheCost) {
+  std::string line;
+  OutputErrorProgress progress([&line](const std::string& l) { line = l; }, "stage 1/1",
+                               std::chrono::steady_clock::now(), 12000, 1e-6);
+  ceres::IterationSummary s;
+  s.iteration = 3;
+  s.cost = 85183.94;
+  s.step_norm = 0.0894;
+  s.trust_region_radius = 6.4e4;
+  s.relative_decrease = 0.393;
+  s.step_is_successful = true;
+  EXPECT_EQ(progress(s), ceres::SOLVER_CONTINUE);
+  EXPECT_NE(line.find("stage 1/1: iteration  3  cost 8.518394e+04  |step| 8.94e-02"),
+            std::string::npos)
+      << line;
+  EXPECT_NE(line.find("tr_radius 6.4e+04  tr_ratio 0.39"), std::string::npos) << line;
 }
 
 }  // namespace
