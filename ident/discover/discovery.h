@@ -59,8 +59,8 @@ struct DiscoveryOptions {
   // linearised test, and those predicted to remove at least half of
   // min_share_of_excess; when the current fit holds parameters at a bound, at
   // most this many more acting on the channels they distort (restarted off
-  // the bounds). Largest predicted drop first, side by side on at most
-  // fit.num_threads threads (more refits than cores only slow each down).
+  // the bounds). Largest predicted drop first, refitted one at a time in
+  // that order, each on fit.num_threads threads.
   int max_refits = 3;
   // A refit that qualifies and removes at least this share of the excess
   // error over all channels decides its round: a candidate ranked below it

@@ -107,23 +107,20 @@ std::vector<RefitOfRound> Judged(const std::vector<CandidateRefit>& refits,
                                  const std::vector<int>& shortlist,
                                  const std::vector<CandidateScore>& scores, size_t count);
 
-// Refits the shortlisted candidates side by side and judges each: Wald p
-// below alpha over the `family` of refits (Bonferroni), no parameter at a bound,
-// and at least min_share_of_excess of its channels' excess error removed on
-// the estimation data and on the held-out data. Those from `waits_from` on
-// count only if the round adds none of those before them (ChooseOfRound);
-// they take the threads the others leave free, stop once one of those
-// qualifies, and are refitted again if that one is not added after all (a
-// veto), so the outcome does not depend on the timing.
-std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
-                                            const std::vector<EstimationLog>& estimation,
-                                            const std::vector<EstimationLog>& validation,
-                                            const ModelSnapshot& now, const std::vector<int>& shortlist,
-                                            size_t family,
-                                            const std::map<std::string, double>& declared_at_bounds,
-                                            std::vector<CandidateScore>* scores,
-                                            const DiscoveryOptions& o, DiscoveryClock::time_point start,
-                                            size_t waits_from = SIZE_MAX) {
+// Refits the shortlisted candidates one at a time, in shortlist order, and
+// judges each: Wald p below alpha over the `family` of refits (Bonferroni),
+// no parameter at a bound, and at least min_share_of_excess of its channels'
+// excess error removed on the estimation data and on the held-out data. The
+// first that qualifies and removes at least decisive_share_of_all_excess of
+// the excess over all channels decides: those ranked below it are not
+// refitted. Those from `waits_from` on count only if the round adds none of
+// those before them (ChooseOfRound), and are refitted only then.
+std::vector<CandidateRefit> RefitInRankOrder(
+    const CandidatePass& pass, const std::vector<EstimationLog>& estimation,
+    const std::vector<EstimationLog>& validation, const ModelSnapshot& now,
+    const std::vector<int>& shortlist, size_t family,
+    const std::map<std::string, double>& declared_at_bounds, std::vector<CandidateScore>* scores,
+    const DiscoveryOptions& o, DiscoveryClock::time_point start, size_t waits_from = SIZE_MAX) {
   const int n = static_cast<int>(shortlist.size());
   const int waiting = static_cast<int>(std::min<size_t>(waits_from, shortlist.size()));
   std::vector<CandidateRefit> refits(n);
@@ -132,38 +129,21 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   for (int k : shortlist) names += (names.empty() ? "" : ", ") + (*scores)[k].effect;
   Say(o, "discover: refitting " + names + " jointly (" +
              NumberText(SecondsSince(start), "%.1f s") + " so far)");
-  // Each worker's fits and held-out predictions: its share of the threads,
-  // silent (side by side: the loop reports each result).
-  DiscoveryOptions worker_options = o;
-  OutputErrorOptions& fit = worker_options.fit;
-  const int workers = SideBySideWorkers(n, o.fit, &fit);
+  // Each refit with every thread, silent (the loop reports each result). One
+  // at a time rather than side by side: the first refit decides its round
+  // often, and a refit alone on two threads takes about 0.55 of its time on
+  // one (measured, bench/discover_speed.sh: in 33 of 70 rounds of more than
+  // one refit on 80 logs the first decided; docs/discover_confusion.md, "One
+  // refit at a time").
+  DiscoveryOptions quiet = o;
+  quiet.fit.progress = nullptr;
   const double level = WaldLevel(o, family);
-  // The first (in shortlist order) refit that qualifies and removes at least
-  // decisive_share_of_all_excess of the excess over all channels; the refits
-  // ranked below it stop, whichever finished first, so the outcome does not
-  // depend on the timing.
-  std::atomic<int> decided_by{n};
-  // The scores as scored: a refit stopped part way has written some of its
-  // fields (its estimates, rss_after) at whatever point it stopped.
-  std::vector<CandidateScore> as_scored;
-  for (int k : shortlist) as_scored.push_back((*scores)[k]);
-  // One of those before `waiting` qualifies: the waiting ones stop.
-  std::atomic<bool> one_before_qualifies{false};
-  std::vector<char> finished(n, 0);  // ran to its end, stopped by nothing
-  // Refit k is not needed (any more): ranked below a decisive one, or waiting
-  // behind one that qualifies.
-  auto not_needed = [&decided_by, &one_before_qualifies, waiting](int k) {
-    return decided_by.load() < k || (k >= waiting && one_before_qualifies.load());
-  };
+  int decided_by = n;  // the decisive refit, if one is
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
     OutputErrorResult refit;
-    OutputErrorOptions fit_k = fit;
-    fit_k.stop_requested = [&not_needed, k] { return not_needed(k); };
-    const bool usable = RefitCandidate(pass, estimation, fit_k, declared_at_bounds, &s, &refit,
+    const bool usable = RefitCandidate(pass, estimation, quiet.fit, declared_at_bounds, &s, &refit,
                                        &refits[k].next);
-    if (fit_k.stop_requested()) return;  // stopped: set aside below, unjudged
-    finished[k] = 1;
     if (!usable) return;
     Vehicle v = refits[k].next.fitted;
     refits[k].snapshot = Snapshot(v, refit, estimation, {}, o);
@@ -184,40 +164,37 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
     // 50 iterations), and it decides only a candidate that passes every gate
     // on the estimation data.
     if (!validation.empty() && WhyNotConfirmed(s, level, o).empty()) {
-      AddValidation(validation, worker_options, &refits[k].snapshot);
+      AddValidation(validation, quiet, &refits[k].snapshot);
       s.share_of_excess_held_out =
           ShareOfExcessRemoved(now.validation, refits[k].snapshot.validation,
                                now.validation_residual_tests, s.channels)
               .share;
     }
     refits[k].ok = true;
-    if (k < waiting && WhyNotConfirmed(s, level, o).empty()) one_before_qualifies = true;
     if (all.share >= o.decisive_share_of_all_excess && WhyNotConfirmed(s, level, o).empty()) {
-      int d = decided_by.load();
-      while (k < d && !decided_by.compare_exchange_weak(d, k)) {  // the lowest k decides
-      }
+      decided_by = k;
     }
   };
-  auto one = [&](int k) {
-    const auto t0 = DiscoveryClock::now();
-    evaluate(k);
-    refits[k].seconds = SecondsSince(t0);
+  // Refits first ... last - 1, up to a decisive one.
+  auto refit_range = [&](int first, int last) {
+    for (int k = first; k < last && decided_by == n; ++k) {
+      const auto t0 = DiscoveryClock::now();
+      evaluate(k);
+      refits[k].seconds = SecondsSince(t0);
+    }
   };
-  SideBySide(n, workers, fit, [&](int k) {
-    if (!not_needed(k)) one(k);
-  });
-  // Refit k's score back as scored, with why it is not judged.
+  refit_range(0, waiting);
+  // Refit k's score marked not refitted, with why.
   auto set_back = [&](int k, const std::string& why) {
     CandidateScore& s = (*scores)[shortlist[k]];
-    s = as_scored[k];
     s.refitted = false;
     s.refit_starts.clear();
     s.confirmed = false;
     s.why_not_confirmed = why;
   };
-  // The waiting ones: set aside if the round adds one of those before them;
-  // otherwise those a qualifying one stopped (then vetoed) are refitted now.
-  const size_t judged_before = static_cast<size_t>(std::min(waiting, decided_by.load() + 1));
+  // The waiting ones: set aside if the round adds one of those before them,
+  // refitted otherwise.
+  const size_t judged_before = static_cast<size_t>(std::min(waiting, decided_by + 1));
   for (size_t k = 0; k < judged_before; ++k) {
     CandidateScore& s = (*scores)[shortlist[k]];
     if (refits[k].ok) s.confirmed = WhyNotConfirmed(s, level, o).empty();
@@ -225,41 +202,25 @@ std::vector<CandidateRefit> RefitInParallel(const CandidatePass& pass,
   const RoundChoice before =
       ChooseOfRound(Judged(refits, shortlist, *scores, judged_before), level,
                     o.min_channels_excess, o.decisive_share_of_all_excess, o.min_share_of_excess);
-  std::vector<char> set_aside(n, 0), reported(n, 0);
-  if (waiting < n && before.added >= 0) {
+  std::vector<char> set_aside(n, 0);
+  if (before.added >= 0) {
     const std::string& effect = (*scores)[shortlist[before.added]].effect;
     for (int k = waiting; k < n; ++k) {
       set_back(k, "not refitted: " + effect +
                   ", refitted before it, qualifies; the next round tests it against the "
                   "model with " + effect);
-      refits[k] = CandidateRefit();
       set_aside[k] = 1;
     }
-  } else if (waiting < n) {
-    std::vector<int> again;
-    for (int k = waiting; k < n; ++k) {
-      if (finished[k] || k > decided_by.load()) continue;
-      (*scores)[shortlist[k]] = as_scored[k];  // a stopped refit wrote part of it
-      again.push_back(shortlist[k]);
-    }
-    if (!again.empty()) {
-      std::vector<CandidateRefit> redone = RefitInParallel(
-          pass, estimation, validation, now, again, family, declared_at_bounds, scores, o, start);
-      for (int k = waiting, j = 0; k < n; ++k) {
-        if (finished[k] || k > decided_by.load()) continue;
-        refits[k] = std::move(redone[j++]);
-        reported[k] = 1;
-      }
-    }
+  } else {
+    refit_range(waiting, n);
   }
   for (int k = 0; k < n; ++k) {
     CandidateScore& s = (*scores)[shortlist[k]];
-    if (reported[k]) continue;
     if (set_aside[k]) {
       Say(o, "  refit " + s.effect + ": " + s.why_not_confirmed);
       continue;
     }
-    const int decider = decided_by.load();
+    const int decider = decided_by;
     if (k > decider) {
       const std::string& effect = (*scores)[shortlist[decider]].effect;
       set_back(k, "not judged: " + effect + ", ranked above it, qualifies and removes " +
@@ -398,8 +359,8 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
   RoundRefits r;
   r.shortlist = list.first;
   r.shortlist.insert(r.shortlist.end(), list.after_passing.begin(), list.after_passing.end());
-  r.refits = RefitInParallel(pass, estimation, validation, now, r.shortlist, family, at_bounds,
-                             scores, o, start, list.first.size());
+  r.refits = RefitInRankOrder(pass, estimation, validation, now, r.shortlist, family, at_bounds,
+                              scores, o, start, list.first.size());
   const RoundChoice slots =
       ChooseOfRound(Judged(r, *scores), WaldLevel(o, family), o.min_channels_excess,
                     o.decisive_share_of_all_excess, o.min_share_of_excess);
@@ -419,8 +380,8 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
     Say(o, "  none of the slots' refits is added: refitting those acting on the lost channels");
     RoundRefits more;
     more.shortlist = list.on_lost_channels;
-    more.refits = RefitInParallel(pass, estimation, validation, now, more.shortlist, family,
-                                  at_bounds, scores, o, start);
+    more.refits = RefitInRankOrder(pass, estimation, validation, now, more.shortlist, family,
+                                   at_bounds, scores, o, start);
     r.shortlist.insert(r.shortlist.end(), more.shortlist.begin(), more.shortlist.end());
     for (CandidateRefit& refit : more.refits) r.refits.push_back(std::move(refit));
   }
@@ -436,9 +397,9 @@ RoundRefits RefitListed(const CandidatePass& pass, const ModelSnapshot& now, con
                         DiscoveryClock::time_point start) {
   RoundRefits r;
   r.shortlist = listed;
-  r.refits = RefitInParallel(pass, estimation, validation, now, r.shortlist, family,
-                             ConfigValuesOfSymptomaticParameters(pass.fit.parameters, declared),
-                             scores, o, start);
+  r.refits = RefitInRankOrder(pass, estimation, validation, now, r.shortlist, family,
+                              ConfigValuesOfSymptomaticParameters(pass.fit.parameters, declared),
+                              scores, o, start);
   ChooseAndSay(&r, family, scores, o);
   return r;
 }

@@ -1,8 +1,8 @@
 // One round of the closing loop (effects.md steps 3-6), in the pieces the
 // loop (discovery.cc) and the paired refit (paired_refit.h) share: score
-// every candidate against the current model, refit the shortlisted ones side
-// by side, judge each refit on the gates of discovery.h, and choose what the
-// round adds (round_choice.h).
+// every candidate against the current model, refit the shortlisted ones one
+// at a time in rank order, judge each refit on the gates of discovery.h, and
+// choose what the round adds (round_choice.h).
 #pragma once
 
 #include <chrono>
@@ -81,8 +81,9 @@ struct RoundRefits {
 
 // Shortlists the candidates of `*scores` (none of `excluded`), restarting the
 // declared parameters (config values in `declared`) that the current fit
-// left at a bound or far outside their range, refits them side by side
-// against `now` and chooses (ChooseOfRound). The slots' symptomatic ones
+// left at a bound or far outside their range, refits them one at a time in
+// rank order (up to one that decides the round) against `now` and chooses
+// (ChooseOfRound). The slots' symptomatic ones
 // (RoundShortlist::after_passing), then those beyond the slots on the
 // channels the fit has lost (RoundShortlist::on_lost_channels), are refitted
 // only when none of those refitted before them is added. Fills the scores'
@@ -95,7 +96,7 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
                              DiscoveryClock::time_point start);
 
 // The candidates `listed` (indices into *scores, restarts marked by an
-// earlier RefitShortlisted of the same scores) refitted side by side against
+// earlier RefitShortlisted of the same scores) refitted in rank order against
 // `now` and judged at the Wald level of `family` refits (at least as many
 // as listed): what RefitShortlisted does once it has its shortlist.
 RoundRefits RefitListed(const CandidatePass& pass, const ModelSnapshot& now, const Vehicle& declared,

@@ -547,7 +547,7 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     solver_options.function_tolerance =
         coarse ? options.coarse_function_tolerance : options.function_tolerance;
     OutputErrorProgress callback(options.progress, stage_name, start, total_rows,
-                                 solver_options.function_tolerance, options.stop_requested);
+                                 solver_options.function_tolerance);
     solver_options.callbacks = {&callback};
     // A continued fit's trust region for its first stage; Ceres' default after.
     solver_options.initial_trust_region_radius =
@@ -586,11 +586,6 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     result.hit_iteration_limit = solve.hit_iteration_limit;
     if (!summary.iterations.empty()) {
       result.trust_region_radius = summary.iterations.back().trust_region_radius;
-    }
-    if (summary.termination_type == ceres::USER_FAILURE) {
-      result.usable = false;
-      result.why_not_usable = std::string(stage_name) + ": stopped on request";
-      return result;
     }
     if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() ||
         !theta_scaled.allFinite()) {

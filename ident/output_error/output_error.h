@@ -122,10 +122,6 @@ struct OutputErrorOptions {
   // Progress lines (iteration, cost, elapsed); nullptr for none. Library code
   // does not print: the CLI passes a function that writes to stderr.
   std::function<void(const std::string&)> progress;
-  // Asked once an iteration; true stops the fit there, unusable ("stopped
-  // on request"). nullptr: never (the discovery loop stops the refits a
-  // qualifying one has made moot).
-  std::function<bool()> stop_requested;
 
   static IntegratorOptions DefaultIntegrator() {
     IntegratorOptions o;

@@ -24,10 +24,8 @@ int IterationsLeftAtLinearRate(double previous_drop, double drop, double cost,
 OutputErrorProgress::OutputErrorProgress(std::function<void(const std::string&)> print,
                                          std::string stage,
                                          std::chrono::steady_clock::time_point start, long rows,
-                                         double function_tolerance,
-                                         std::function<bool()> stop_requested)
+                                         double function_tolerance)
     : print_(std::move(print)),
-      stop_requested_(std::move(stop_requested)),
       stage_(std::move(stage)),
       start_(start),
       rows_(rows),
@@ -40,7 +38,6 @@ ceres::CallbackReturnType OutputErrorProgress::operator()(const ceres::Iteration
                                                    function_tolerance_)
                       : -1;
   if (s.iteration > 0 && s.step_is_successful) previous_drop_ = drop;
-  if (stop_requested_ && stop_requested_()) return ceres::SOLVER_ABORT;
   if (!print_) return ceres::SOLVER_CONTINUE;
   char line[320];
   int n = std::snprintf(line, sizeof line,

@@ -4,8 +4,7 @@
 // tr_radius and tr_ratio: a ratio that stays well below 1 while the radius
 // stays wide open is a Gauss-Newton model that keeps overrating its steps,
 // the crawl of a fit along a misfit), elapsed time, rows per
-// second, and the time the stage has left at its present rate of convergence;
-// it also stops the solve when its owner asks (OutputErrorOptions::stop_requested).
+// second, and the time the stage has left at its present rate of convergence.
 #pragma once
 
 #include <chrono>
@@ -31,12 +30,11 @@ class OutputErrorProgress : public ceres::IterationCallback {
   // rows: the logs' rows, each simulated (with sensitivities) once an iteration.
   OutputErrorProgress(std::function<void(const std::string&)> print, std::string stage,
                       std::chrono::steady_clock::time_point start, long rows,
-                      double function_tolerance, std::function<bool()> stop_requested = nullptr);
+                      double function_tolerance);
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override;
 
  private:
   std::function<void(const std::string&)> print_;
-  std::function<bool()> stop_requested_;
   std::string stage_;
   std::chrono::steady_clock::time_point start_;
   long rows_;

@@ -1,11 +1,11 @@
 // Threads that fits run side by side have finished with, lent to the fits
 // still running.
 //
-// discover refits several models at once, each on its share of the cores
-// (ident/discover/round_refits.h, SideBySide). The refits of a round end at
-// different times, and an odd batch (three refits on two cores) leaves one
-// core idle for the whole of its last refit. A worker that runs out of
-// refits adds its threads here; every segment evaluation of a fit still
+// discover restarts a fit from several points at once, each on its share of
+// the cores (ident/discover/round_refits.h, SideBySide). The restarts end at
+// different times, and an odd batch (three restarts on two cores) leaves one
+// core idle for the whole of its last restart. A worker that runs out of
+// restarts adds its threads here; every segment evaluation of a fit still
 // running (ParallelSegmentEvaluation) borrows what is idle for that
 // evaluation and gives it back. Lending changes no result: each segment is
 // the same whichever thread computes it, and Ceres reads them in its own

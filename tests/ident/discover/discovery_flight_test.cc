@@ -195,8 +195,8 @@ INSTANTIATE_TEST_SUITE_P(
     [](const testing::TestParamInfo<EffectCase>& info) { return info.param.effect; });
 
 // A qualifying refit that removes nearly all of the excess error over all
-// channels decides its round: the refits ranked below it stop
-// (decisive_share_of_all_excess). Stopping them changes nothing the loop
+// channels decides its round: the refits ranked below it are not run
+// (decisive_share_of_all_excess). Leaving them out changes nothing the loop
 // decides: the same effects and the same final estimates as with every
 // shortlisted refit run to its end.
 TEST(DiscoverFlight, ARefitThatDecidesItsRoundChangesNothingByStoppingTheRest) {
@@ -211,8 +211,7 @@ TEST(DiscoverFlight, ARefitThatDecidesItsRoundChangesNothingByStoppingTheRest) {
     if (s.why_not_confirmed.rfind("not judged", 0) != 0) continue;
     ++not_judged;
     EXPECT_FALSE(s.refitted) << s.effect;
-    // As scored: nothing of the refit that was stopped part way (its
-    // estimates, its Wald test), which depends on where it stopped.
+    // As scored: nothing of a refit (its estimates, its Wald test).
     EXPECT_EQ(s.parameters.size(), 0) << s.effect;
     EXPECT_EQ(s.wald_p_value, 1) << s.effect;
     EXPECT_TRUE(s.refit_starts.empty()) << s.effect;

@@ -38,7 +38,7 @@ TEST(ChooseOfRound, ALesserCandidateIsNotAddedBesideARefitAtABoundThatRemovesAlm
 TEST(ChooseOfRound, TheQualifyingRefitThatRemovesTheMostOverAllChannelsIsAdded) {
   const CandidateScore a = Refitted(true, true, 1e-9, 10);
   const CandidateScore b = Refitted(true, true, 1e-9, 40);
-  const CandidateScore unjudged = Refitted(true, true, 1e-9, 90);  // stopped: not judged
+  const CandidateScore unjudged = Refitted(true, true, 1e-9, 90);  // ranked below a decisive one: not judged
   const RoundChoice c = ChooseOfRound({{&a, true, 0.1}, {&b, true, 0.4}, {&unjudged, false, 0.9}},
                                       kLevel, kMinExcess, kDecisive, kMinShare);
   EXPECT_EQ(c.added, 1);

@@ -134,20 +134,6 @@ TEST(OutputError, NoiseFreeFlightAndBalanceRecoverTheTruth) {
   }
 }
 
-TEST(OutputError, AFitAskedToStopStopsThereUnusable) {
-  const Vehicle nominal = Nominal();
-  const Vehicle truth = MakeTruthVehicle(nominal.config, TruthScenario());
-  const std::vector<EstimationLog> logs = {MakeEstimationLog(FlightLog(truth, 2.0, 5, true)),
-                                           MakeEstimationLog(BalanceLog(truth, 6, true))};
-  OutputErrorOptions options = FastOptions();
-  int asked = 0;
-  options.stop_requested = [&asked] { return ++asked > 3; };  // once an iteration
-  const OutputErrorResult r = FitOutputError(StartOff(nominal, truth, 1.3), logs, options);
-  EXPECT_FALSE(r.usable);
-  EXPECT_NE(r.why_not_usable.find("stopped on request"), std::string::npos) << r.why_not_usable;
-  EXPECT_EQ(asked, 4);  // asked after iterations 0-3, stopped at the fourth answer
-}
-
 TEST(OutputError, NoisyFlightAndBalanceEstimatesWithinThreeStd) {
   const Vehicle nominal = Nominal();
   const Vehicle truth = MakeTruthVehicle(nominal.config, TruthScenario());
