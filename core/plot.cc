@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/atomic_file.h"
+#include "core/cores.h"
 #include "core/errors.h"
 #include "core/report_values.h"
 
@@ -325,8 +326,7 @@ bool RenderFigure(const Figure& figure, const std::string& png_path, std::string
 }
 
 FigureRenderer::FigureRenderer(int parallel) {
-  if (parallel <= 0) parallel = static_cast<int>(std::thread::hardware_concurrency());
-  parallel = std::max(parallel, 1);
+  if (parallel <= 0) parallel = NumCores();
   for (int i = 0; i < parallel; ++i) workers_.emplace_back([this] { Work(); });
 }
 

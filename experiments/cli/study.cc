@@ -4,11 +4,11 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <thread>
 
 #include <gflags/gflags.h>
 
 #include "core/atomic_file.h"
+#include "core/cores.h"
 #include "core/errors.h"
 #include "core/plot.h"
 #include "core/report.h"
@@ -224,7 +224,7 @@ int Job() {
   InstallStudyStopHandler();
   const bool interrupted =
       RunShard(spec, out, out + "/parts/job_" + std::to_string(shard) + ".jsonl", shard, shards,
-               Jobs(static_cast<int>(std::thread::hardware_concurrency())),
+               Jobs(NumCores()),
                "study job " + std::to_string(shard));
   return interrupted ? 130 : 0;
 }
@@ -313,7 +313,7 @@ int RunStudy() {
     return status;
   }
   const StudySpec spec = LoadStudySpec(FLAGS_spec);
-  const int jobs = Jobs(static_cast<int>(std::thread::hardware_concurrency()));
+  const int jobs = Jobs(NumCores());
   PrepareStudyFolder(spec, FLAGS_out, FLAGS_restart);
   InstallStudyStopHandler();
   const bool interrupted =

@@ -82,8 +82,8 @@ std::vector<std::string> LostChannels(const std::map<std::string, FitError>& fit
 // not need them.
 // Where some candidates pass their score test, the slots' symptomatic ones
 // (failing it, shortlisted for acting on a distorted channel) count only if
-// none of the passing ones' refits is added (`after_passing`; they take the
-// threads the others leave free and stop once one of those qualifies): the
+// none of the passing ones' refits is added (`after_passing`; they are
+// refitted after those, and only then): the
 // next round tests them against the model with it (measured, seed 20622 of
 // bench/discover_speed.sh, gyroscopic moments and rotor damping, flight only,
 // Ixx, Iyy, Izz far outside their range: gyroscopic passed and qualified;

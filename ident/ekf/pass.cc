@@ -8,9 +8,9 @@
 #include <cmath>
 #include <future>
 #include <memory>
-#include <thread>
 #include <utility>
 
+#include "core/cores.h"
 #include "ident/ekf/rts_smoother.h"
 
 namespace coaxid {
@@ -163,7 +163,7 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
     // own store, a few blocks ahead of the backward pass on this thread (the backward pass
     // is the cheap part). The forward pass filled the last block's store.
     const int workers =
-        std::max(1, std::min(static_cast<int>(std::thread::hardware_concurrency()), 4));
+        std::min(NumCores(), 4);
     std::vector<std::unique_ptr<EkfFilter>> filters;
     std::vector<std::unique_ptr<RtsSmoother>> owned;
     std::vector<RtsSmoother*> stores = {&smoother};

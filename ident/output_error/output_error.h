@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "core/cores.h"
 #include "core/parameters.h"
 #include "core/statistics.h"
 #include "dynamics/integrator.h"
@@ -111,7 +112,11 @@ struct OutputErrorOptions {
   // on it; one RK4 step per hold costs less than the variational equations
   // on the integrator's steps (bench/experiments/simulation/flight_bench).
   SensitivityMethod sensitivity_method = SensitivityMethod::kRungeKuttaPerHold;
-  int num_threads = 2;
+  // Threads for the segments' simulations: every core. A fit's result does
+  // not depend on it (each segment is the same whichever thread computes
+  // it, and Ceres adds them in one fixed order); a study's runs take one
+  // each (experiments/studies/run.cc).
+  int num_threads = NumCores();
   // Threads that fits side by side with this one have finished with, lent
   // to its segment evaluations (spare_threads.h); nullptr: none.
   std::shared_ptr<SpareThreads> spare_threads;

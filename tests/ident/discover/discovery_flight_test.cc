@@ -199,7 +199,7 @@ INSTANTIATE_TEST_SUITE_P(
 // (decisive_share_of_all_excess). Leaving them out changes nothing the loop
 // decides: the same effects and the same final estimates as with every
 // shortlisted refit run to its end.
-TEST(DiscoverFlight, ARefitThatDecidesItsRoundChangesNothingByStoppingTheRest) {
+TEST(DiscoverFlight, ARefitThatDecidesItsRoundChangesNothingByLeavingOutTheRest) {
   const Effects effects = {{"cg_offset", {{"x_g", Value(1e-3)}, {"y_g", Value(-0.7e-3)}}}};
   const FlightScenario f = ShortFlight(10, /*low=*/false);
   DiscoveryOptions every_refit = Options();
@@ -223,6 +223,31 @@ TEST(DiscoverFlight, ARefitThatDecidesItsRoundChangesNothingByStoppingTheRest) {
   for (const std::string& name : b.FreeNames()) {
     EXPECT_NEAR(a.Value(name), b.Value(name), 1e-9 * std::fabs(b.Value(name))) << name;
   }
+}
+
+// The loop's answer does not depend on its threads (OutputErrorOptions::
+// num_threads is every core): on one thread and on three, the same effects,
+// candidates' tests and final estimates, to the last bit.
+TEST(DiscoverFlight, TheLoopIsTheSameOnOneThreadAndOnThree) {
+  const Effects effects = {{"cg_offset", {{"x_g", Value(1e-3)}, {"y_g", Value(-0.7e-3)}}}};
+  const FlightScenario f = ShortFlight(10, /*low=*/false);
+  DiscoveryOptions one = Options(), three = Options();
+  one.fit.num_threads = 1;
+  three.fit.num_threads = 3;
+  const DiscoveryResult a = DiscoverIn(effects, f, 67, one).result;
+  const DiscoveryResult b = DiscoverIn(effects, f, 67, three).result;
+  ASSERT_FALSE(a.added.empty()) << "nothing added: this case tests too little";
+  EXPECT_EQ(a.added, b.added);
+  ASSERT_EQ(a.candidates.size(), b.candidates.size());
+  for (size_t k = 0; k < a.candidates.size(); ++k) {
+    EXPECT_EQ(a.candidates[k].effect, b.candidates[k].effect);
+    EXPECT_EQ(a.candidates[k].p_value, b.candidates[k].p_value) << a.candidates[k].effect;
+    EXPECT_EQ(a.candidates[k].wald_p_value, b.candidates[k].wald_p_value)
+        << a.candidates[k].effect;
+  }
+  const ParameterSet& x = a.final.result.parameters;
+  const ParameterSet& y = b.final.result.parameters;
+  for (const std::string& name : x.FreeNames()) EXPECT_EQ(x.Value(name), y.Value(name)) << name;
 }
 
 TEST(DiscoverFlight, RotorDragIsTakenByTheBodyDragNotByAWrongEffect) {
