@@ -162,8 +162,7 @@ PassResult RunPass(const EkfProblem& pb, const Eigen::VectorXd& p_start, bool fr
     // independent: `workers` filters run them side by side on their own threads, each into its
     // own store, a few blocks ahead of the backward pass on this thread (the backward pass
     // is the cheap part). The forward pass filled the last block's store.
-    const int workers =
-        std::min(NumCores(), 4);
+    const int workers = std::min(NumCores(), 4);
     std::vector<std::unique_ptr<EkfFilter>> filters;
     std::vector<std::unique_ptr<RtsSmoother>> owned;
     std::vector<RtsSmoother*> stores = {&smoother};
