@@ -126,7 +126,6 @@ nlohmann::json IdentifyKinematic(const IdentifyRun& run) {
   options.scale_factors = FLAGS_kinematic_scale_factors;
   options.time_offset = FLAGS_kinematic_time_offset;
   options.segment_s = FLAGS_kinematic_segment_s;
-  options.num_threads = 2;
   if (!run.config.empty()) options.gravity = LoadVehicleConfig(run.config).parameters.Value("g");
   std::string why;
   if (!options.IsValid(&why)) throw InputError("--kinematic_*: " + why);

@@ -32,6 +32,7 @@
 
 #include <Eigen/Core>
 
+#include "core/cores.h"
 #include "core/log.h"
 #include "core/statistics.h"
 #include "ident/estimation_log.h"
@@ -49,7 +50,7 @@ struct KinematicOptions {
   double segment_s = 0.5;     // multiple-shooting segment length [s]
   double gravity = 9.81;      // [m/s^2] (the config's g)
   int max_iterations = 100;
-  int num_threads = 1;
+  int num_threads = NumCores();  // every core (core/cores.h)
   std::function<void(const std::string&)> progress;  // progress lines; nullptr: none
   bool IsValid(std::string* why) const;
 };
