@@ -128,6 +128,29 @@ TEST(FlightPathReconstruction, RecoversBiasesScaleFactorsAndA20msOffset) {
   }
 }
 
+// The threads default to every core, so the answer must not depend on
+// them: on one thread and on three, the same estimates and stds (to
+// rounding: Ceres may sum a parallel evaluation in another order).
+TEST(FlightPathReconstruction, TheSameOnOneThreadAndOnThree) {
+  SensorErrors e;
+  e.bias = {{"b_p", 0.02}, {"b_ax", 0.15}};
+  e.late_rows = 4;
+  const EstimationLog log = MakeEstimationLog(FlightWithSensorErrors(e, 33));
+  KinematicOptions one, three;
+  one.num_threads = 1;
+  three.num_threads = 3;
+  const KinematicResult a = ReconstructFlightPath({log}, one);
+  const KinematicResult b = ReconstructFlightPath({log}, three);
+  ASSERT_GT(a.iterations, 0);
+  EXPECT_EQ(a.estimated, b.estimated);
+  EXPECT_EQ(a.iterations, b.iterations);
+  for (int k = 0; k < a.estimate.size(); ++k) {
+    EXPECT_NEAR(a.estimate[k], b.estimate[k], 1e-9 * (1 + std::fabs(a.estimate[k])))
+        << a.names[k];
+    EXPECT_NEAR(a.std[k], b.std[k], 1e-9 * (1 + a.std[k])) << a.names[k];
+  }
+}
+
 TEST(FlightPathReconstruction, CleanSensorsGiveNothing) {
   const KinematicResult r =
       ReconstructFlightPath({MakeEstimationLog(FlightWithSensorErrors({}, 32))}, KinematicOptions{});
