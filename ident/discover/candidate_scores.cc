@@ -643,7 +643,8 @@ ColumnTest EffectWaldTest(const CandidatePass& at_refit, const std::string& effe
 bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
                     const OutputErrorOptions& fit_options,
                     const std::map<std::string, double>& declared_at_bounds,
-                    CandidateScore* score, OutputErrorResult* refit, CandidatePass* next) {
+                    CandidateScore* score, OutputErrorResult* refit, CandidatePass* next,
+                    const ReweightingGate& reweighting) {
   score->refitted = true;
   // The other parameters start at the current fit, every declared one free
   // (a bound the declared fit pressed one against may let go). Restarted
@@ -763,6 +764,21 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
   // once, as the declared fit did, and is judged at its own (measured,
   // undeclared CG offset, flight only: the refit at the current weights
   // removed 30 % of its channels' excess, reweighted 59 %).
+  // A refit that removes almost none of its channels' excess at the current
+  // weights is not re-weighted (up to two more capped solves): the
+  // re-weighting does not make it material (DiscoveryOptions::
+  // min_share_to_reweight).
+  if (reweighting.share) {
+    const double share = reweighting.share(*refit);
+    if (!(share >= reweighting.min_share)) {
+      score->share_of_excess = share;
+      score->why_not_confirmed =
+          "practically insignificant: at the current noise weights its refit removes " +
+          NumberText(100 * share, "%.1f") + " % of its channels' excess error, below " +
+          NumberText(100 * reweighting.min_share, "%.0f") + " %: not re-weighted";
+      return false;
+    }
+  }
   Vehicle candidate = CandidateVehicle(pass.fitted, score->effect);
   if (Reweighted(candidate, logs, fit_options, refit)) take(*refit);
   candidate.parameters = refit->parameters;

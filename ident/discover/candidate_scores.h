@@ -34,6 +34,7 @@
 #pragma once
 
 #include <limits>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -256,9 +257,20 @@ ColumnTest EffectWaldTest(const CandidatePass& at_refit, const std::string& effe
 // the refit in *refit and the pass at the refit (the next round's scoring
 // pass, if it is accepted) in *next. False, with why_not_confirmed, when the
 // refit or the test fails.
+//
+// `reweighting` (optional) keeps a hopeless refit from its re-weighting: a
+// kept start whose share of its channels' excess error, at the current fit's
+// noise weights (`reweighting.share`, ShareOfExcessRemoved of the refit's
+// predictions), is below `reweighting.min_share` is rejected there as
+// practically insignificant, without re-weighting and without its Wald test.
+struct ReweightingGate {
+  std::function<double(const OutputErrorResult&)> share;  // nullptr: every refit re-weights
+  double min_share = 0;
+};
 bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>& logs,
                     const OutputErrorOptions& fit_options,
                     const std::map<std::string, double>& declared_at_bounds,
-                    CandidateScore* score, OutputErrorResult* refit, CandidatePass* next);
+                    CandidateScore* score, OutputErrorResult* refit, CandidatePass* next,
+                    const ReweightingGate& reweighting = {});
 
 }  // namespace coaxid

@@ -197,6 +197,10 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
     *why = "min_share_of_excess must be in [0, 1)";
     return false;
   }
+  if (!(min_share_to_reweight >= 0 && min_share_to_reweight < 1)) {
+    *why = "min_share_to_reweight must be in [0, 1)";
+    return false;
+  }
   if (!(min_channels_excess >= 0)) {
     *why = "min_channels_excess must be >= 0";
     return false;
@@ -684,6 +688,7 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
              "weighted RSS is kept if it gains that much"},
             {"min_share_of_excess", options.min_share_of_excess},
             {"min_channels_excess", options.min_channels_excess},
+            {"min_share_to_reweight", options.min_share_to_reweight},
             {"max_refits", options.max_refits},
             {"decisive_share_of_all_excess", options.decisive_share_of_all_excess},
             {"restart_min_gain", options.restart_min_gain},

@@ -142,8 +142,15 @@ std::vector<CandidateRefit> RefitInRankOrder(
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
     OutputErrorResult refit;
+    ReweightingGate reweighting;
+    reweighting.min_share = std::min(o.min_share_to_reweight, o.min_share_of_excess);
+    reweighting.share = [&](const OutputErrorResult& r) {
+      return ShareOfExcessRemoved(now.fit, ChannelFitErrors(estimation, r.predictions),
+                                  now.residual_tests, s.channels)
+          .share;
+    };
     const bool usable = RefitCandidate(pass, estimation, quiet.fit, declared_at_bounds, &s, &refit,
-                                       &refits[k].next);
+                                       &refits[k].next, reweighting);
     if (!usable) return;
     Vehicle v = refits[k].next.fitted;
     refits[k].snapshot = Snapshot(v, refit, estimation, {}, o);

@@ -17,6 +17,8 @@
 #include <gtest/gtest.h>
 
 #include "ident/discover/candidate_scores.h"
+#include "ident/discover/practical_significance.h"
+#include "ident/discover/residual_analysis.h"
 #include "ident/noise_weights.h"
 #include "tests/ident/discover/discovery_test_util.h"
 
@@ -209,6 +211,19 @@ TEST(LinearisePass, TheResidualIsTheFitsOwnWithEveryCandidateAbsent) {
   }
 }
 
+// A short flight and a balance log of a vehicle with an undeclared CG offset
+// of 0.4 and -0.3 mm.
+std::vector<EstimationLog> CgOffsetFlightAndBalance() {
+  const Vehicle truth = Truth({{"cg_offset", {{"x_g", Value(4e-4)}, {"y_g", Value(-3e-4)}}}});
+  FlightScenario f = ShippedFlightScenario().flight;
+  f.duration_s = 6;
+  BalanceScenario b;  // the default staircase, short holds
+  b.hold_s = 0.5;
+  b.rate_hz = 50;
+  return {MakeEstimationLog(SimulateFlight(truth, f, 3)),
+          MakeEstimationLog(SimulateBalance(truth, b, 21))};
+}
+
 // Issue 13, seed 6215 of the confusion study (undeclared CG offset, flight
 // only): the cg_offset refit with Iyy restarted at its config value ended
 // worse than the declared fit and was rejected as insignificant. Here (a
@@ -218,14 +233,7 @@ TEST(LinearisePass, TheResidualIsTheFitsOwnWithEveryCandidateAbsent) {
 // refit must run again from the linearised step and keep that, which ends
 // below the current fit.
 TEST(RefitCandidate, AStartThatEndsAboveTheCurrentFitIsRunAgainFromTheOther) {
-  const Vehicle truth = Truth({{"cg_offset", {{"x_g", Value(4e-4)}, {"y_g", Value(-3e-4)}}}});
-  FlightScenario f = ShippedFlightScenario().flight;
-  f.duration_s = 6;
-  BalanceScenario b;  // the default staircase, short holds
-  b.hold_s = 0.5;
-  b.rate_hz = 50;
-  const std::vector<EstimationLog> logs = {MakeEstimationLog(SimulateFlight(truth, f, 3)),
-                                           MakeEstimationLog(SimulateBalance(truth, b, 21))};
+  const std::vector<EstimationLog> logs = CgOffsetFlightAndBalance();
   const OutputErrorOptions options = OneSecondSegments();
   OutputErrorResult fit;
   const CandidatePass pass = DeclaredPass(logs, options, &fit);
@@ -263,6 +271,56 @@ TEST(RefitCandidate, AStartThatEndsAboveTheCurrentFitIsRunAgainFromTheOther) {
   RefitCandidate(pass, logs, options, {}, &again, &refit, &next);
   ASSERT_EQ(again.refit_starts.size(), 1u);
   EXPECT_LT(again.refit_starts[0].cost, current);
+}
+
+// A refit whose kept start removes less than the gate's share of its
+// channels' excess error at the current weights is rejected before its noise
+// re-weighting, reporting that share (DiscoveryOptions::min_share_to_reweight);
+// one above it is re-weighted and Wald-tested as before. The same refit
+// (undeclared CG offset, as above) is judged at a gate just below and just
+// above the share it removes.
+TEST(RefitCandidate, ARefitBelowTheGateIsRejectedBeforeItsReweighting) {
+  const std::vector<EstimationLog> logs = CgOffsetFlightAndBalance();
+  OutputErrorResult fit;
+  const CandidatePass pass = DeclaredPass(logs, OneSecondSegments(), &fit);
+  ASSERT_TRUE(fit.usable) << fit.why_not_usable;
+  std::vector<CandidateScore> scores = ScoreCandidates(pass, logs, 0.01, 1, 1.0);
+  auto cg = std::find_if(scores.begin(), scores.end(),
+                         [](const CandidateScore& s) { return s.effect == "cg_offset"; });
+  ASSERT_NE(cg, scores.end());
+  const std::map<std::string, FitError> before = ChannelFitErrors(logs, fit.predictions);
+  const std::vector<ChannelResidualTest> tests = AnalyseResiduals(logs, fit.predictions, {});
+  std::vector<double> seen;  // the share of every refit the gate judged
+  ReweightingGate gate;
+  gate.min_share = 0.05;
+  gate.share = [&](const OutputErrorResult& r) {
+    seen.push_back(
+        ShareOfExcessRemoved(before, ChannelFitErrors(logs, r.predictions), tests, cg->channels)
+            .share);
+    return seen.back();
+  };
+  OutputErrorOptions options = OneSecondSegments();
+  options.noise_relaxations = 1;  // without the gate every refit is re-weighted
+  OutputErrorResult refit;
+  CandidatePass next;
+  CandidateScore above = *cg;
+  ASSERT_TRUE(RefitCandidate(pass, logs, options, {}, &above, &refit, &next, gate))
+      << above.why_not_confirmed;
+  ASSERT_EQ(seen.size(), 1u);
+  EXPECT_GT(seen[0], 0.3);  // the truth's effect: most of its channels' excess
+  EXPECT_NE(refit.noise.std, fit.noise.std);  // re-weighted
+  EXPECT_LT(above.wald_p_value, 0.01);
+  // The same refit with the gate above what it removes.
+  gate.min_share = 1.01 * seen[0];
+  CandidateScore below = *cg;
+  EXPECT_FALSE(RefitCandidate(pass, logs, options, {}, &below, &refit, &next, gate));
+  ASSERT_EQ(seen.size(), 2u);
+  EXPECT_EQ(seen[1], seen[0]);  // the same kept start, before any re-weighting
+  EXPECT_EQ(below.share_of_excess, seen[1]);
+  EXPECT_NE(below.why_not_confirmed.find("not re-weighted"), std::string::npos)
+      << below.why_not_confirmed;
+  EXPECT_EQ(refit.noise.std, fit.noise.std);
+  EXPECT_EQ(below.wald_p_value, 1);  // not tested
 }
 
 }  // namespace
