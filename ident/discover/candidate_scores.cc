@@ -759,11 +759,6 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
     score->why_not_confirmed = "at the refit every parameter of it sits at a bound";
     return false;
   }
-  // The current fit's weights are inflated by a missing effect in the very
-  // channels it reaches: the model with the candidate re-estimates them
-  // once, as the declared fit did, and is judged at its own (measured,
-  // undeclared CG offset, flight only: the refit at the current weights
-  // removed 30 % of its channels' excess, reweighted 59 %).
   // A refit that removes almost none of its channels' excess at the current
   // weights is not re-weighted (up to two more capped solves): the
   // re-weighting does not make it material (DiscoveryOptions::
@@ -779,6 +774,11 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
       return false;
     }
   }
+  // The current fit's weights are inflated by a missing effect in the very
+  // channels it reaches: the model with the candidate re-estimates them
+  // once, as the declared fit did, and is judged at its own (measured,
+  // undeclared CG offset, flight only: the refit at the current weights
+  // removed 30 % of its channels' excess, reweighted 59 %).
   Vehicle candidate = CandidateVehicle(pass.fitted, score->effect);
   if (Reweighted(candidate, logs, fit_options, refit)) take(*refit);
   candidate.parameters = refit->parameters;

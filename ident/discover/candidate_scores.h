@@ -33,8 +33,8 @@
 // explains in the direction the bound blocks).
 #pragma once
 
-#include <limits>
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
