@@ -58,6 +58,10 @@ struct IntegratorOptions {
   // Use coaxid's compiled-with-optimisation vector kernels instead of the system SUNDIALS
   // library's (dynamics/serial_vector_ops.h). Off only to compare the two.
   bool optimized_vector_ops = true;
+  // Read by Simulator, not by Integrator: the state takes one classic RK4 step per hold
+  // interval (four right-hand sides) instead of the integrator's adaptive steps, except on an
+  // interval that step finds too stiff, which the integrator takes (Simulator::Run).
+  bool one_rk4_step_per_hold = false;
 
   bool IsValid(std::string* why) const;
 };

@@ -32,7 +32,8 @@ struct Trajectory {
 // - kVariationalEquations: the integrator on the state augmented with its
 //   variational equations (one vector; sensitivities follow the state's
 //   steps, every stage of every step evaluates the Jacobians);
-// - kRungeKuttaPerHold: the integrator on the state alone, and one classic
+// - kRungeKuttaPerHold: the integrator on the state alone (or the same
+//   classic RK4 step, IntegratorOptions::one_rk4_step_per_hold), and one classic
 //   Runge-Kutta step per hold interval on the variational equations, with the
 //   Jacobians at the interval's two ends and at its midpoint (the state there
 //   by cubic Hermite interpolation, O(h^4)): three Jacobians an interval
@@ -107,6 +108,16 @@ class Simulator {
     Eigen::VectorXd f0, f1, xm;
     Eigen::MatrixXd A0, Am, A1, B0, Bm, B1, K1, K2, K3, K4, Stage;
   } rk_;
+  // The state over one hold interval [t0, t1] from *x: one classic RK4 step
+  // with options_.one_rk4_step_per_hold (the integrator where that step is
+  // too stiff or fails), else the integrator.
+  bool StepState(double t0, double t1, Eigen::VectorXd* x);
+  // One classic RK4 step of the state; false (x untouched) where the step
+  // fails or its stages say h |lambda| > kMaxRungeKuttaStiffness.
+  bool RungeKuttaStateStep(double t0, double t1, Eigen::VectorXd* x);
+  struct StateScratch {
+    Eigen::VectorXd k1, k2, k3, k4, z;
+  } state_rk_;
   int columns_ = 0;
   std::string error_;
 };

@@ -142,6 +142,17 @@ struct OutputErrorOptions {
     // sensitivities on the variational equations, took discover's
     // restarts to 332 s at 500 steps, 33 s at 50, the same answer).
     o.max_steps_per_interval = 50;
+    // The state by one classic RK4 step per 5 ms hold (the step the
+    // sensitivities take already), the integrator only on an interval too
+    // stiff for it: four right-hand sides a hold where Dormand-Prince at
+    // rtol 1e-7 took 9.65 (1.21 steps a hold, failed ones and the restart
+    // included; seed 20910, a whole discover run), and the state's replays
+    // were about 40 % of a fit's time. Its error over a second, 8.6e-9 of
+    // the state's size (simulator_test), is far below any noise. discover on
+    // the 44 flight-only logs of seeds 20980-21059: 343 -> 263 s summed,
+    // the largest 26.4 -> 18.8 s, the same added effects on every log
+    // (docs/discover_confusion.md, twenty-seventh session).
+    o.one_rk4_step_per_hold = true;
     return o;
   }
   static IntegratorOptions CoarseIntegrator() {
