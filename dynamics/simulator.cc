@@ -152,15 +152,8 @@ bool Simulator::StepState(double t0, double t1, Eigen::VectorXd* x) {
 }
 
 bool Simulator::RungeKuttaStateStep(double t0, double t1, Eigen::VectorXd* x) {
-  StateScratch& w = state_rk_;
-  const int n = static_cast<int>(x->size());
-  for (Eigen::VectorXd* v : {&w.k1, &w.k2, &w.k3, &w.k4, &w.z}) v->resize(n);
-  const double h = t1 - t0;
-  if (!ode_.Rhs(t0, x->data(), w.k1.data())) return false;
-  w.z = *x + (h / 2) * w.k1;
-  if (!ode_.Rhs(t0 + h / 2, w.z.data(), w.k2.data())) return false;
-  w.z = *x + (h / 2) * w.k2;
-  if (!ode_.Rhs(t0 + h / 2, w.z.data(), w.k3.data())) return false;
+  Rk4Stages& w = state_rk_;
+  if (!Rk4Step(ode_, t0, t1 - t0, *x, &w, &state_next_) || !state_next_.allFinite()) return false;
   // Stiffness from the stages (Hairer's DOPRI5 test): the second and third
   // sit (h / 2) (k2 - k1) apart, so 2 |k3 - k2| / |k2 - k1| estimates
   // h |lambda| along that direction. Beyond the RK4 sensitivity step's own
@@ -172,11 +165,7 @@ bool Simulator::RungeKuttaStateStep(double t0, double t1, Eigen::VectorXd* x) {
   // (a rate crossing zero) and cost more than it saved.
   const double spread = (w.k2 - w.k1).norm();
   if (spread > 0 && 2 * (w.k3 - w.k2).norm() > kMaxRungeKuttaStiffness * spread) return false;
-  w.z = *x + h * w.k3;
-  if (!ode_.Rhs(t1, w.z.data(), w.k4.data())) return false;
-  w.z = *x + (h / 6) * (w.k1 + 2 * w.k2 + 2 * w.k3 + w.k4);
-  if (!w.z.allFinite()) return false;
-  x->swap(w.z);
+  x->swap(state_next_);
   return true;
 }
 

@@ -14,6 +14,7 @@
 #include <memory>
 
 #include "dynamics/integrator.h"
+#include "dynamics/rk4.h"
 #include "dynamics/variational_system.h"
 #include "dynamics/vehicle_ode.h"
 
@@ -115,9 +116,8 @@ class Simulator {
   // One classic RK4 step of the state; false (x untouched) where the step
   // fails or its stages say h |lambda| > kMaxRungeKuttaStiffness.
   bool RungeKuttaStateStep(double t0, double t1, Eigen::VectorXd* x);
-  struct StateScratch {
-    Eigen::VectorXd k1, k2, k3, k4, z;
-  } state_rk_;
+  Rk4Stages state_rk_;
+  Eigen::VectorXd state_next_;
   int columns_ = 0;
   std::string error_;
 };
