@@ -38,6 +38,22 @@ copy="$spec_dir/.speed_${name}.yaml"
 trap 'rm -f "$copy"' EXIT
 sed "s/^seeds: .*/seeds: {count: $count, base: $base}/" "$spec" > "$copy"
 
+# The machine, so that wall times from different sessions can be read against
+# each other: the development machines have moved between CPUs (a Jet<8>
+# model pass 90 ns on one, 146 ns on an AVX-512 one, 240 ns on a Zen 3 one;
+# docs/discover_confusion.md, twenty-ninth session). The reference is one
+# model pass with ceres::Jet<double, 8>, the arithmetic the fits spend most in.
+cpu="$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)"
+reference="no build/bench/model_bench"
+model_bench="$(dirname "$coaxid")/bench/model_bench"
+if [[ -x "$model_bench" ]]; then
+  reference="$("$model_bench" --benchmark_filter='^BM_DerivativeJet<8>/all_effects:0$' \
+    --benchmark_min_time=0.5 --benchmark_format=csv 2> /dev/null |
+    awk -F, '/BM_DerivativeJet/ {printf "%.0f ns of CPU", $4}')"
+fi
+echo "machine: $cpu, $(nproc) cores; a Jet<8> model pass (model_bench): $reference"
+echo
+
 times=()
 outs=()
 within=0
