@@ -43,6 +43,9 @@ if [ "${1:-}" = "--sanitize" ]; then
   # logs (9 s in Release, 211 s here; it passed under the sanitizers once);
   # its new code (SymptomaticParameters) runs here in its unit test.
   SANITIZE_SKIP+='|^DiscoverSymptomCli\.'
+  # The same with a paired refit (25-42 s in Release): RefitBesideABound
+  # runs in the Release tests only, as for ABarBesideASwashplateBiasIsFoundAsAPair.
+  SANITIZE_SKIP+='|^DiscoverPairCli\.'
   # Ten study runs, and two random bars refined by the EKF (7-8 s in Release,
   # 139-143 s here; measured 2026-11-28): their code paths run here in the
   # other study tests and EkfEffectStates tests. The whole loop on a flight

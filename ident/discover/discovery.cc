@@ -201,6 +201,10 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
     *why = "min_share_to_reweight must be in [0, 1)";
     return false;
   }
+  if (!(min_share_to_pair >= 0 && min_share_to_pair < 1)) {
+    *why = "min_share_to_pair must be in [0, 1)";
+    return false;
+  }
   if (!(min_channels_excess >= 0)) {
     *why = "min_channels_excess must be >= 0";
     return false;
@@ -673,8 +677,9 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
              "at a bound and it removes at least min_share_of_excess of its channels' excess "
              "error (an excess of at least min_channels_excess) on the estimation and the "
              "held-out data; the qualifying refit that removes the most excess error over all "
-             "channels is added; a round that adds nothing but holds a significant, material refit "
-             "with a parameter of its own at a bound is refitted with that candidate in the "
+             "channels is added; a round that adds nothing but holds a significant refit that "
+             "removes at least min_share_to_pair of its channels' excess error with a parameter "
+             "of its own at a bound is refitted with that candidate in the "
              "model, and the best candidate qualifying there is added with it if, at their "
              "joint refit, it is inside its bounds and significant and the pair removes at "
              "least min_share_of_excess of their channels' excess error (if beside it the first "
@@ -689,6 +694,7 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
             {"min_share_of_excess", options.min_share_of_excess},
             {"min_channels_excess", options.min_channels_excess},
             {"min_share_to_reweight", options.min_share_to_reweight},
+            {"min_share_to_pair", std::min(options.min_share_to_pair, options.min_share_of_excess)},
             {"max_refits", options.max_refits},
             {"decisive_share_of_all_excess", options.decisive_share_of_all_excess},
             {"restart_min_gain", options.restart_min_gain},

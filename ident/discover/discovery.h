@@ -63,6 +63,16 @@ struct DiscoveryOptions {
   // "Hopeless refits not re-weighted"). 0: every refit re-weights; never
   // above min_share_of_excess.
   double min_share_to_reweight = 0.05;
+  // A round that adds nothing is refitted beside a refit at its own bound
+  // (paired_refit.h) when that refit is significant and removes at least this
+  // share of its channels' excess (never above min_share_of_excess; the pair
+  // itself must remove min_share_of_excess). Measured on the 240 judged runs
+  // of 2026-12-06: the one refit between 0.15 and 0.3 in any round was a
+  // stabilizer bar at its T_b bound removing 0.24 beside an undeclared CG
+  // offset (11966), the pair then removing 101 % of its channels' excess;
+  // between 0.1 and 0.15 lay wind, gyro_bias and wake_interference refits of
+  // truths without them (docs/discover_confusion.md, twenty-ninth session).
+  double min_share_to_pair = 0.2;
   // Candidates refitted per round: at most this many that pass the
   // linearised test, and those predicted to remove at least half of
   // min_share_of_excess; when the current fit holds parameters at a bound, at

@@ -9,18 +9,19 @@
 namespace coaxid {
 namespace {
 
-// The refit of the round at its own bound that is significant and material
-// on its channels (estimation data), the one removing the most excess error
-// over all channels; -1: none.
+// The refit of the round at its own bound that is significant and removes
+// at least min_share_to_pair of its channels' excess (estimation data), the
+// one removing the most excess error over all channels; -1: none.
 int FirstAtItsBound(const RoundRefits& round, const std::vector<CandidateScore>& scores,
                     const DiscoveryOptions& o) {
   const double level = WaldLevel(o, round.shortlist.size());
+  const double min_share = std::min(o.min_share_to_pair, o.min_share_of_excess);
   int first = -1;
   for (size_t k = 0; k < round.refits.size(); ++k) {
     const CandidateScore& s = scores[round.shortlist[k]];
     if (!round.refits[k].ok || s.plausible || !(s.wald_p_value < level) ||
         !(s.channels_excess >= o.min_channels_excess) ||
-        !(s.share_of_excess >= o.min_share_of_excess)) {
+        !(s.share_of_excess >= min_share)) {
       continue;
     }
     if (first < 0 || round.refits[k].share_of_all_excess > round.refits[first].share_of_all_excess) {

@@ -2,8 +2,8 @@
 // issue 13).
 //
 // A round that adds nothing may hold a refit that is significant and removes
-// a material share of its channels' excess error, but carries one of its own
-// parameters to a bound: the effect pushed past its range stands in for a
+// a material share of its channels' excess error (min_share_to_pair, 0.2),
+// but carries one of its own parameters to a bound: the effect pushed past its range stands in for a
 // second one beside it (measured, controllers' study seeds 8901 and 8902: a
 // stabilizer bar beside a swashplate bias, the bar's T_b at its 10 s bound,
 // its slow tilt taking the bias's place; no other candidate qualified
