@@ -11,7 +11,6 @@
 // practical threshold (0.3), the rule before.
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
@@ -19,16 +18,12 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "core/log.h"
-#include "experiments/simulation/simulate_experiment.h"
-#include "experiments/studies/random_draw.h"
-#include "tests/cli_test_dir.h"
-#include "tests/run_coaxid.h"
+#include "tests/discover_on_a_draw.h"
 
 namespace coaxid {
 namespace {
 
-using DiscoverPairCli = CliTestDir;
+using DiscoverPairCli = DiscoverOnADraw;
 
 TEST_F(DiscoverPairCli, ACgOffsetBesideABarAtItsBoundIsAddedWithIt) {
   const StudySpec spec =
@@ -37,19 +32,8 @@ TEST_F(DiscoverPairCli, ACgOffsetBesideABarAtItsBoundIsAddedWithIt) {
   ASSERT_EQ(draw.truth_label, "cg_offset+stabilizer_bar");
   ASSERT_EQ(draw.scenarios.size(), 2u);  // the flight, then the balance
   ASSERT_TRUE(draw.has_held_out);
-  const auto simulate = [&](const Scenario& s, const std::string& name) {
-    WriteLog(Path(name), SimulateScenario(MakeTruthVehicle(spec.config, s), s));
-    return Path(name);
-  };
-  const std::string flight = simulate(draw.scenarios[0], "flight.csv");
-  const std::string balance = simulate(draw.scenarios[1], "balance.csv");
-  const std::string held_out = simulate(draw.held_out, "held_out.csv");
-  const RunResult run = RunCoaxid("discover --config=" + config_ + " --logs=" + flight + "," +
-                                  balance + " --validate=" + held_out +
-                                  " --noise_relaxations=1 --out=" + Path("out"));
-  ASSERT_EQ(run.status, 0) << run.output;
-  std::ifstream in(Path("out/discovery.json"));
-  const nlohmann::json j = nlohmann::json::parse(in);
+  const nlohmann::json j = Discover(spec, draw);
+  ASSERT_FALSE(j.is_null());
   std::vector<std::string> added = j["added"].get<std::vector<std::string>>();
   std::sort(added.begin(), added.end());
   ASSERT_EQ(added, (std::vector<std::string>{"cg_offset", "stabilizer_bar"})) << j["added"].dump();

@@ -8,23 +8,17 @@
 // and size can have; with only the bound restarted, the bar's refit ended
 // above the current fit and nothing was added (0 of 1 found). With Ixx
 // restarted too, the bar is added.
-#include <filesystem>
-#include <fstream>
 #include <string>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "core/log.h"
-#include "experiments/simulation/simulate_experiment.h"
-#include "experiments/studies/random_draw.h"
-#include "tests/cli_test_dir.h"
-#include "tests/run_coaxid.h"
+#include "tests/discover_on_a_draw.h"
 
 namespace coaxid {
 namespace {
 
-using DiscoverSymptomCli = CliTestDir;
+using DiscoverSymptomCli = DiscoverOnADraw;
 
 TEST_F(DiscoverSymptomCli, AnInertiaFarAboveItsPhysicalRangeIsRestartedAndTheBarFound) {
   StudySpec spec =
@@ -36,19 +30,8 @@ TEST_F(DiscoverSymptomCli, AnInertiaFarAboveItsPhysicalRangeIsRestartedAndTheBar
   ASSERT_EQ(draw.truth_label, "stabilizer_bar");
   ASSERT_EQ(draw.scenarios.size(), 2u);  // the flight, then the balance
   ASSERT_TRUE(draw.has_held_out);
-  const auto simulate = [&](const Scenario& s, const std::string& name) {
-    WriteLog(Path(name), SimulateScenario(MakeTruthVehicle(spec.config, s), s));
-    return Path(name);
-  };
-  const std::string flight = simulate(draw.scenarios[0], "flight.csv");
-  const std::string balance = simulate(draw.scenarios[1], "balance.csv");
-  const std::string held_out = simulate(draw.held_out, "held_out.csv");
-  const RunResult run = RunCoaxid("discover --config=" + config_ + " --logs=" + flight + "," +
-                                  balance + " --validate=" + held_out +
-                                  " --noise_relaxations=1 --out=" + Path("out"));
-  ASSERT_EQ(run.status, 0) << run.output;
-  std::ifstream in(Path("out/discovery.json"));
-  const nlohmann::json j = nlohmann::json::parse(in);
+  const nlohmann::json j = Discover(spec, draw);
+  ASSERT_FALSE(j.is_null());
   EXPECT_EQ(j["added"], nlohmann::json::array({"stabilizer_bar"}));
   // Ixx inside its bounds, far above m r^2: reported as such, with the range.
   bool ixx_far_above = false;

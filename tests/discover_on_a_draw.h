@@ -1,0 +1,46 @@
+// A fixture for the CLI tests of the closing loop on one randomised draw of a
+// study spec (experiments/studies/random_draw.h): its flight, balance and
+// held-out logs simulated into the test's folder and `coaxid discover` run on
+// them the way a user would.
+#pragma once
+
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "core/log.h"
+#include "experiments/simulation/simulate_experiment.h"
+#include "experiments/studies/random_draw.h"
+#include "tests/cli_test_dir.h"
+#include "tests/run_coaxid.h"
+
+namespace coaxid {
+
+class DiscoverOnADraw : public CliTestDir {
+ protected:
+  // discovery.json of `coaxid discover` on the draw's flight and balance logs
+  // (draw.scenarios, in that order) with its held-out flight; null, with a
+  // test failure, when the program fails.
+  nlohmann::json Discover(const StudySpec& spec, const RandomDraw& draw) {
+    const auto simulate = [&](const Scenario& s, const std::string& name) {
+      WriteLog(Path(name), SimulateScenario(MakeTruthVehicle(spec.config, s), s));
+      return Path(name);
+    };
+    const std::string flight = simulate(draw.scenarios.at(0), "flight.csv");
+    const std::string balance = simulate(draw.scenarios.at(1), "balance.csv");
+    const std::string held_out = simulate(draw.held_out, "held_out.csv");
+    const RunResult run = RunCoaxid("discover --config=" + config_ + " --logs=" + flight + "," +
+                                    balance + " --validate=" + held_out +
+                                    " --noise_relaxations=1 --out=" + Path("out"));
+    if (run.status != 0) {
+      ADD_FAILURE() << run.output;
+      return nullptr;
+    }
+    std::ifstream in(Path("out/discovery.json"));
+    return nlohmann::json::parse(in);
+  }
+};
+
+}  // namespace coaxid
