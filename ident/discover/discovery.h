@@ -67,11 +67,13 @@ struct DiscoveryOptions {
   // (paired_refit.h) when that refit is significant and removes at least this
   // share of its channels' excess (never above min_share_of_excess; the pair
   // itself must remove min_share_of_excess). Measured on the 240 judged runs
-  // of 2026-12-06: the one refit between 0.15 and 0.3 in any round was a
-  // stabilizer bar at its T_b bound removing 0.24 beside an undeclared CG
-  // offset (11966), the pair then removing 101 % of its channels' excess;
-  // between 0.1 and 0.15 lay wind, gyro_bias and wake_interference refits of
-  // truths without them (docs/discover_confusion.md, twenty-ninth session).
+  // of seeds 11880-11999 and 10740-10859: the one refit between 0.15 and 0.3
+  // in any round was a stabilizer bar at its T_b bound removing 0.24 beside
+  // an undeclared CG offset (11966), the pair then removing 101 % of its
+  // channels' excess; between 0.1 and 0.15 lay wind, gyro_bias and
+  // wake_interference refits of truths without them. On the next 240 runs
+  // never run before it started no pair that 0.3 would not have
+  // (docs/discover_confusion.md, twenty-ninth session).
   double min_share_to_pair = 0.2;
   // Candidates refitted per round: at most this many that pass the
   // linearised test, and those predicted to remove at least half of
