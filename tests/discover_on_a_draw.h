@@ -13,6 +13,7 @@
 #include "core/log.h"
 #include "experiments/simulation/simulate_experiment.h"
 #include "experiments/studies/random_draw.h"
+#include "experiments/studies/spec.h"
 #include "tests/cli_test_dir.h"
 #include "tests/run_coaxid.h"
 
@@ -20,10 +21,22 @@ namespace coaxid {
 
 class DiscoverOnADraw : public CliTestDir {
  protected:
+  // The randomised spec of the confusion study (issue 13).
+  static StudySpec ConfusionSpec() {
+    return LoadStudySpec(std::string(COAXID_SOURCE_DIR) +
+                         "/configs/studies/discover_confusion.yaml");
+  }
+
   // discovery.json of `coaxid discover` on the draw's flight and balance logs
   // (draw.scenarios, in that order) with its held-out flight; null, with a
-  // test failure, when the program fails.
+  // test failure, when the draw lacks one of them or the program fails.
   nlohmann::json Discover(const StudySpec& spec, const RandomDraw& draw) {
+    if (draw.scenarios.size() != 2 || !draw.has_held_out) {
+      ADD_FAILURE() << "the draw holds " << draw.scenarios.size()
+                    << " estimation logs (a flight and a balance wanted) and "
+                    << (draw.has_held_out ? "a" : "no") << " held-out flight";
+      return nullptr;
+    }
     const auto simulate = [&](const Scenario& s, const std::string& name) {
       WriteLog(Path(name), SimulateScenario(MakeTruthVehicle(spec.config, s), s));
       return Path(name);
