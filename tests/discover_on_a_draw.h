@@ -27,10 +27,18 @@ class DiscoverOnADraw : public CliTestDir {
                          "/configs/studies/discover_confusion.yaml");
   }
 
+  // ... and of the controllers' study (each run its own controller and sensors).
+  static StudySpec ControllersSpec() {
+    return LoadStudySpec(std::string(COAXID_SOURCE_DIR) +
+                         "/configs/studies/discover_controllers.yaml");
+  }
+
   // discovery.json of `coaxid discover` on the draw's flight and balance logs
   // (draw.scenarios, in that order) with its held-out flight; null, with a
-  // test failure, when the draw lacks one of them or the program fails.
-  nlohmann::json Discover(const StudySpec& spec, const RandomDraw& draw) {
+  // test failure, when the draw lacks one of them or the program fails. The
+  // logs and outputs go to the test's folder, their names led by `prefix`.
+  nlohmann::json Discover(const StudySpec& spec, const RandomDraw& draw,
+                          const std::string& prefix = "") {
     if (draw.scenarios.size() != 2 || !draw.has_held_out) {
       ADD_FAILURE() << "the draw holds " << draw.scenarios.size()
                     << " estimation logs (a flight and a balance wanted) and "
@@ -41,17 +49,17 @@ class DiscoverOnADraw : public CliTestDir {
       WriteLog(Path(name), SimulateScenario(MakeTruthVehicle(spec.config, s), s));
       return Path(name);
     };
-    const std::string flight = simulate(draw.scenarios.at(0), "flight.csv");
-    const std::string balance = simulate(draw.scenarios.at(1), "balance.csv");
-    const std::string held_out = simulate(draw.held_out, "held_out.csv");
+    const std::string flight = simulate(draw.scenarios.at(0), prefix + "flight.csv");
+    const std::string balance = simulate(draw.scenarios.at(1), prefix + "balance.csv");
+    const std::string held_out = simulate(draw.held_out, prefix + "held_out.csv");
     const RunResult run = RunCoaxid("discover --config=" + config_ + " --logs=" + flight + "," +
                                     balance + " --validate=" + held_out +
-                                    " --noise_relaxations=1 --out=" + Path("out"));
+                                    " --noise_relaxations=1 --out=" + Path(prefix + "out"));
     if (run.status != 0) {
       ADD_FAILURE() << run.output;
       return nullptr;
     }
-    std::ifstream in(Path("out/discovery.json"));
+    std::ifstream in(Path(prefix + "out/discovery.json"));
     return nlohmann::json::parse(in);
   }
 };

@@ -27,6 +27,13 @@ DEFINE_int32(max_added, 4, "discover: add at most this many effects");
 DEFINE_double(min_share_of_excess, 0.3,
               "discover: the least share of its channels' excess error (rms^2 - noise^2) an "
               "effect must remove, on the estimation and the held-out data, to be added");
+DEFINE_double(min_share_to_pair, 0.1,
+              "discover: a round that adds nothing is refitted beside a significant refit at "
+              "its own bound that removes at least this share of its channels' excess error "
+              "(never above --min_share_of_excess)");
+DEFINE_double(fit_rate_hz, 100,
+              "discover: fit flight logs sampled faster than this [Hz] with runs of their rows "
+              "averaged (pairs at 200 Hz; each fit costs half); 0: every log at its own rate");
 DECLARE_double(segment_s);
 
 namespace coaxid {
@@ -36,7 +43,7 @@ namespace fs = std::filesystem;
 
 constexpr const char* kDiscoverUsage =
     "usage: coaxid discover --logs=A.csv[,B.csv] --config=F --out=DIR [--validate=C.csv] "
-    "[--holdout_fraction=0.2] [--alpha=0.01] [--max_added=4] [--segment_s=1]";
+    "[--holdout_fraction=0.2] [--alpha=0.01] [--max_added=4] [--segment_s=1] [--fit_rate_hz=100]";
 
 std::string Num(double v, const char* fmt = "%.4g") {
   if (!std::isfinite(v)) return "-";
@@ -137,6 +144,13 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
   o << "Logs: ";
   for (const std::string& l : logs) o << "`" << l << "` ";
   o << "\n\nHeld-out data: " << validation << "\n\n";
+  o << "Rates fitted (flight logs sampled faster than " << Num(options.fit_rate_hz)
+    << " Hz are fitted with runs of their rows averaged; errors and residuals below are on "
+       "those rows):\n\n";
+  for (const std::vector<LogAtFitRate>* set : {&r.estimation, &r.validation}) {
+    for (const LogAtFitRate& a : *set) o << "- " << a.note << "\n";
+  }
+  o << "\n";
   o << "Declared effects: ";
   const auto declared = r.baseline.vehicle.EffectNames();
   o << (declared.empty() ? "none (the paper's model)" : "");
@@ -287,6 +301,8 @@ int RunDiscover() {
   options.max_added = FLAGS_max_added;
   options.min_share_of_excess = FLAGS_min_share_of_excess;
   options.window_s = FLAGS_segment_s;
+  options.fit_rate_hz = FLAGS_fit_rate_hz;
+  options.min_share_to_pair = FLAGS_min_share_to_pair;
   options.fit.segment_schedule_s = {std::min(0.25, FLAGS_segment_s), FLAGS_segment_s};
   if (FLAGS_segment_s <= 0.25) options.fit.segment_schedule_s = {FLAGS_segment_s};
   options.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
@@ -312,19 +328,19 @@ int RunDiscover() {
   };
   render(Autocorrelations(r), "residual_autocorrelation");
   render(Spectra(r), "residual_spectrum");
-  for (size_t i = 0; i < split.estimation.size(); ++i) {
-    render(MeasuredVersusModelsFigure("estimation: " + split.estimation[i].source,
-                                      split.estimation[i],
+  for (size_t i = 0; i < r.estimation.size(); ++i) {  // the logs as fitted (fit_rate_hz)
+    const EstimationLog& log = r.estimation[i].log;
+    render(MeasuredVersusModelsFigure("estimation: " + log.source, log,
                                       {{"declared model", &r.baseline.result.predictions[i], "blue"},
                                        {"final model", &r.final.result.predictions[i], "red"}}),
-           "fit_" + std::to_string(i + 1) + "_" + split.estimation[i].name);
+           "fit_" + std::to_string(i + 1) + "_" + log.name);
   }
-  for (size_t i = 0; i < split.validation.size(); ++i) {
-    render(MeasuredVersusModelsFigure("held out: " + split.validation[i].source,
-                                      split.validation[i],
+  for (size_t i = 0; i < r.validation.size(); ++i) {
+    const EstimationLog& log = r.validation[i].log;
+    render(MeasuredVersusModelsFigure("held out: " + log.source, log,
                                       {{"declared model", &r.baseline.validation_predictions[i], "blue"},
                                        {"final model", &r.final.validation_predictions[i], "red"}}),
-           "validation_" + std::to_string(i + 1) + "_" + split.validation[i].name);
+           "validation_" + std::to_string(i + 1) + "_" + log.name);
   }
   std::string plot_error;
   const std::vector<std::string> plots = renderer.Finish(&plot_error);

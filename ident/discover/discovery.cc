@@ -205,6 +205,10 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
     *why = "min_share_to_pair must be in [0, 1)";
     return false;
   }
+  if (!(fit_rate_hz >= 0 && std::isfinite(fit_rate_hz))) {
+    *why = "fit_rate_hz must be >= 0 (0: every log at its own rate)";
+    return false;
+  }
   if (!(min_channels_excess >= 0)) {
     *why = "min_channels_excess must be >= 0";
     return false;
@@ -347,14 +351,25 @@ std::vector<std::string> ExcludedEffects(const std::vector<RemovedEffect>& remov
   return excluded;
 }
 
-DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLog>& estimation,
-                         const std::vector<EstimationLog>& validation,
+DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLog>& logs,
+                         const std::vector<EstimationLog>& held_out,
                          const DiscoveryOptions& options) {
   const auto start = DiscoveryClock::now();
   std::string why;
   if (!options.IsValid(&why)) throw InputError("discover options: " + why);
-  if (estimation.empty()) throw InputError("discover: no estimation log");
+  if (logs.empty()) throw InputError("discover: no estimation log");
   DiscoveryResult out;
+  out.estimation = AtFitRate(logs, options.fit_rate_hz);
+  out.validation = AtFitRate(held_out, options.fit_rate_hz);
+  std::vector<EstimationLog> estimation, validation;  // what every step below fits and judges
+  for (const LogAtFitRate& a : out.estimation) {
+    estimation.push_back(a.log);
+    if (a.log.kind == LogKind::kFlight) Say(options, "discover: " + a.note);
+  }
+  for (const LogAtFitRate& a : out.validation) {
+    validation.push_back(a.log);
+    if (a.log.kind == LogKind::kFlight) Say(options, "discover: held out " + a.note);
+  }
   // Runs step() and adds its wall time to `name` (DiscoveryResult::seconds_by_step).
   auto timed = [&out](const char* name, auto&& step) {
     const auto t0 = DiscoveryClock::now();
@@ -650,7 +665,18 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
                                                         ? nlohmann::json(e.share_of_excess_held_out)
                                                         : nlohmann::json()}});
   }
-  return {{"baseline", SnapshotJson(r.baseline, has_validation)},
+  nlohmann::json fitted_logs = nlohmann::json::array();
+  for (const std::vector<LogAtFitRate>* set : {&r.estimation, &r.validation}) {
+    for (const LogAtFitRate& a : *set) {
+      fitted_logs.push_back({{"log", a.log.source},
+                             {"held_out", set == &r.validation},
+                             {"rate_hz", a.log_rate_hz},
+                             {"rows_averaged", a.rows_averaged},
+                             {"note", a.note}});
+    }
+  }
+  return {{"fitted_logs", fitted_logs},
+          {"baseline", SnapshotJson(r.baseline, has_validation)},
           {"start", r.start},
           {"symptoms", symptoms},
           {"candidates", candidates},
@@ -691,6 +717,7 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
              "with them restarted at their config values, all together and, unless that ends "
              "within restart_min_gain of the fit's weighted RSS, each alone; the lowest "
              "weighted RSS is kept if it gains that much"},
+            {"fit_rate_hz", options.fit_rate_hz},
             {"min_share_of_excess", options.min_share_of_excess},
             {"min_channels_excess", options.min_channels_excess},
             {"min_share_to_reweight", options.min_share_to_reweight},

@@ -118,16 +118,19 @@ FlightRun DiscoverInFlight(const Effects& effects, bool low, uint64_t seed, doub
 }
 
 // The model's part of a channel's held-out error: rms^2 = model error^2 +
-// sensor noise^2 (independent), the noise std being the scenario's.
-double ModelError(const ModelSnapshot& s, const std::string& channel) {
+// sensor noise^2 (independent), the noise std being the scenario's, over the
+// square root of the rows the loop averaged into one (fit_rate.h).
+double ModelError(const DiscoveryResult& r, const ModelSnapshot& s, const std::string& channel) {
   const double rms = s.validation.at(channel).rms;
-  const double noise = ShippedFlightScenario().flight.noise_std.at(channel);
+  const double noise = ShippedFlightScenario().flight.noise_std.at(channel) /
+                       std::sqrt(r.validation.at(0).rows_averaged);
   return std::sqrt(std::max(0.0, rms * rms - noise * noise));
 }
 
-double MeanModelError(const ModelSnapshot& s, const std::vector<std::string>& channels) {
+double MeanModelError(const DiscoveryResult& r, const ModelSnapshot& s,
+                      const std::vector<std::string>& channels) {
   double sum = 0;
-  for (const std::string& c : channels) sum += ModelError(s, c);
+  for (const std::string& c : channels) sum += ModelError(r, s, c);
   return sum / channels.size();
 }
 
@@ -154,8 +157,8 @@ TEST_P(DiscoverFlightEffect, FindsItAndOnlyIt) {
   // "Clearly": the model's part of the held-out error of the channels it
   // drives (the rms without the sensor noise, which no model removes) falls
   // by half or more on average.
-  const double before = MeanModelError(r.baseline, c.channels);
-  const double after = MeanModelError(r.final, c.channels);
+  const double before = MeanModelError(r, r.baseline, c.channels);
+  const double after = MeanModelError(r, r.final, c.channels);
   EXPECT_LT(after, 0.5 * before) << "held-out model error " << before << " -> " << after;
   for (const auto& [name, v] : c.truth) ExpectWithinThreeStd(r, run.truth, c.effect + "." + name);
   // The held-out share is computed only for refits that pass every gate on
@@ -272,8 +275,8 @@ TEST(DiscoverFlight, RotorDragIsFoundInFastTransits) {
   const DiscoveryResult& r = run.result;
   ASSERT_EQ(r.added, std::vector<std::string>{"rotor_drag"});
   const std::vector<std::string> channels = {"u", "v", "ax", "ay"};
-  const double before = MeanModelError(r.baseline, channels);
-  const double after = MeanModelError(r.final, channels);
+  const double before = MeanModelError(r, r.baseline, channels);
+  const double after = MeanModelError(r, r.final, channels);
   EXPECT_LT(after, 0.5 * before) << "held-out model error " << before << " -> " << after;
   ExpectWithinThreeStd(r, run.truth, "rotor_drag.k_h");
 }
