@@ -13,6 +13,7 @@
 #include "experiments/simulation/simulate_experiment.h"
 #include "ident/output_error/output_error.h"
 #include "tests/random_truth.h"
+#include "tests/shipped_flight.h"
 
 namespace coaxid {
 namespace {
@@ -120,11 +121,8 @@ TEST(FitRate, EachHoldAppliesTheImpulseOfTheLoggedInputs) {
 // bound at the fit's own noise estimate, so a ratio of stds near 1 says the
 // averaged pairs carry the information of the pairs.
 TEST(FitRate, AFitOfAveragedPairsFindsTheTruthWithTheInformationOfThePairs) {
-  const Vehicle nominal = LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
-  FlightScenario s =
-      LoadScenario(std::string(COAXID_SOURCE_DIR) + "/configs/scenarios/flight.yaml").flight;
-  s.duration_s = 8.0;
-  s.excitation.start_s = 0.0;
+  const Vehicle nominal = ShippedVehicle();
+  const FlightScenario s = ExcitedShippedFlight(8.0);
   OutputErrorOptions o;
   o.noise_relaxations = 1;
   for (uint64_t seed : {31, 32}) {

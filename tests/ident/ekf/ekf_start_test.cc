@@ -10,16 +10,14 @@
 #include "ident/ekf/ekf_start.h"
 #include "ident/output_error/output_error.h"
 #include "tests/random_truth.h"
+#include "tests/shipped_flight.h"
 
 namespace coaxid {
 namespace {
 
 TEST(EkfStart, OneFineSolveLandsWhereCoarseToFineDoes) {
-  const Vehicle nominal = LoadVehicle(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
-  FlightScenario flight =
-      LoadScenario(std::string(COAXID_SOURCE_DIR) + "/configs/scenarios/flight.yaml").flight;
-  flight.duration_s = 10;
-  flight.excitation.start_s = 0;
+  const Vehicle nominal = ShippedVehicle();
+  const FlightScenario flight = ExcitedShippedFlight(10);
   for (uint64_t seed : {61, 62, 63}) {
     const Vehicle truth = RandomTruth(nominal, seed);
     const std::vector<EstimationLog> logs = {
