@@ -400,11 +400,13 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
   Vehicle start_vehicle = declared;
   OutputErrorOptions declared_fit = o.fit;
   out.start = "starting values from the config";
+  bool from_ekf = false;
   if (options.ekf_start) {  // not usable without a flight log: the config start
     const EkfStart ekf = timed(kEkfStart, [&] { return StartFromEkfPass(declared, estimation); });
     Say(options, "discover: " + ekf.note);
     if (ekf.usable) {
       start_vehicle.parameters = ekf.parameters;
+      from_ekf = true;
       declared_fit.segment_schedule_s = {o.fit.segment_schedule_s.back()};
       out.start = ekf.note;
     } else {
@@ -415,6 +417,19 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                    std::to_string(declared.parameters.FreeIndices().size()) + " free parameters)");
   OutputErrorResult fit =
       timed(kDeclaredFit, [&] { return FitOutputError(start_vehicle, estimation, declared_fit); });
+  if (!fit.usable && !fit.scale_move_failed && from_ekf) {
+    // The EKF's values can start the fit where the model cannot be integrated
+    // (measured: seed 11183 of the controllers' study, a swashplate bias,
+    // flight with the balance log: the first evaluation failed). The
+    // config's values and the coarse-to-fine schedule are the start without it.
+    Say(options, "discover: the fit from the EKF start failed (" + fit.why_not_usable +
+                     "); fitting from the config's values");
+    out.start += "; its fit failed: starting values from the config";
+    start_vehicle = declared;
+    declared_fit.segment_schedule_s = o.fit.segment_schedule_s;
+    fit = timed(kDeclaredFit,
+                [&] { return FitOutputError(start_vehicle, estimation, declared_fit); });
+  }
   if (!fit.usable && fit.scale_move_failed) {
     // The declared model needs a scale member beyond its bounds (e.g. the
     // inertias of a vehicle with an undeclared constant moment): a symptom
