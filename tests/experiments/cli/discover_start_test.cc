@@ -7,10 +7,10 @@
 // the first 20 s succeeds, and the output-error fit from its values fails at
 // its first evaluation ("Residual and Jacobian evaluation failed"): discover
 // exited 1. From the config's values the bias is found.
-#include <gtest/gtest.h>
-
-#include <nlohmann/json.hpp>
 #include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "tests/discover_on_a_draw.h"
 
