@@ -3,10 +3,10 @@
 // with the information of the rows they replace.
 #include "ident/fit_rate.h"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <random>
+
+#include <gtest/gtest.h>
 
 #include "core/errors.h"
 #include "dynamics/state.h"

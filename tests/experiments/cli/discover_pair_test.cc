@@ -16,14 +16,14 @@
 // 0.1), the CG offset qualifies and the pair removes all of the excess. Both
 // fail with min_share_to_pair at the practical threshold (0.3), 11031 also
 // at 0.15.
-#include <gtest/gtest.h>
-
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "tests/discover_on_a_draw.h"
 
