@@ -76,8 +76,10 @@ struct DiscoveryOptions {
   // never run before it started no pair that 0.3 would not have
   // (docs/discover_confusion.md, twenty-ninth session). At the fit rate
   // (fit_rate_hz) the bar's share in 11966 is 0.196, and in 11031 (the same
-  // truths, low flight) 0.144; both pairs are added from 0.1, as the model
-  // with both declared fits (thirtieth session).
+  // truths, low flight) 0.144; both pairs are added from 0.1. The pair must
+  // still qualify: on 240 runs never run before the trigger at 0.1 started
+  // no paired refit, and the four seen runs with a refit between 0.1 and 0.2
+  // add what they added at 0.2 (thirtieth session).
   double min_share_to_pair = 0.1;
   // The loop fits flight logs sampled faster than this [Hz] with runs of
   // their rows averaged (ident/fit_rate.h: pairs at 200 Hz), which halves
