@@ -18,6 +18,9 @@ struct EstimationLog {
   std::string name;    // file stem (for output file names)
   LogKind kind = LogKind::kFlight;
   int first_log_row = 0;
+  // Each row is the mean of this many consecutive rows of the log
+  // (ident/fit_rate.h: AverageRows); 1 for a log read as it is.
+  int log_rows_per_row = 1;
   InputHold inputs;  // t and the four inputs of every row
   // Output channels present: FlightChannel or BalanceChannel indices
   // (dynamics/outputs.h), their column names, and values (rows x channels).
@@ -26,6 +29,8 @@ struct EstimationLog {
   Eigen::MatrixXd values;
 
   int NumRows() const { return inputs.size(); }
+  // The log's row (0-based) where row `row` starts, for messages.
+  int LogRow(int row) const { return first_log_row + log_rows_per_row * row; }
   int NumChannels() const { return static_cast<int>(channels.size()); }
   // Column of `channel` in values, or -1.
   int ChannelColumn(int channel) const;

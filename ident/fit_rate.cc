@@ -57,7 +57,7 @@ int RowsPerFitRow(const EstimationLog& log, double fit_rate_hz, std::string* why
   for (size_t k = 0; k + 1 < t.size(); ++k) {
     if (std::fabs((t[k + 1] - t[k]) - h) > 0.01 * h) {
       return keep("fitted at its own rate: its rows are not evenly spaced (row " +
-                  std::to_string(log.first_log_row + k + 2) + ")");
+                  std::to_string(log.LogRow(k + 1) + 1) + ")");
     }
   }
   if (!log.values.allFinite()) {
@@ -91,6 +91,7 @@ EstimationLog AverageRows(const EstimationLog& log, int factor) {
     inputs[j] = MeanInput(hold, times[j], end);
   }
   EstimationLog out = log;
+  out.log_rows_per_row = log.log_rows_per_row * factor;
   out.inputs = InputHold(times, std::move(inputs));
   // The lead-in: the source's, then this log's rows before the first time.
   std::vector<double> lead_t = hold.lead_in_times();

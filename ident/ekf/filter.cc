@@ -100,7 +100,7 @@ bool EkfFilter::Fail(double t, int log, int row, const std::string& reason) {
   const EstimationLog& l = pb_.logs[log];
   failure_time_ = t;
   failure_ = "EKF failed at " + Time(t) + " in " + l.source + " (row " +
-             std::to_string(l.first_log_row + row + 1) + " of the log): " + reason;
+             std::to_string(l.LogRow(row) + 1) + " of the log): " + reason;
   return false;
 }
 

@@ -431,7 +431,7 @@ KinematicResult ReconstructFlightPath(const std::vector<EstimationLog>& logs,
       }
       for (int k = 0; k < log.NumRows(); ++k) {
         if (!std::isfinite(log.values(k, imu[i]))) {
-          throw InputError(log.source + ": row " + std::to_string(log.first_log_row + k + 1) +
+          throw InputError(log.source + ": row " + std::to_string(log.LogRow(k) + 1) +
                            ", column '" + name +
                            "': value missing; the kinematic reconstruction needs the IMU in "
                            "every row");

@@ -86,6 +86,7 @@ TEST(FitRate, OutputsAreTheMeanAtTheMeanTimeAndAnglesStayOnTheCircle) {
   const EstimationLog log = Synthetic(603, 0.005, M_PI - 0.3);
   const EstimationLog a = AverageRows(log, 3);
   ASSERT_EQ(a.NumRows(), 201);
+  EXPECT_EQ(a.LogRow(7), 21);  // messages name the log's rows
   for (int j = 0; j < a.NumRows(); ++j) {
     const double t = a.inputs.time(j);
     EXPECT_NEAR(t, 1 + 0.005 * (3 * j + 1), 1e-12);
