@@ -6,7 +6,7 @@
 // they replace for every signal well below the new Nyquist frequency.
 //
 // The averaged log is a log of the same vehicle (tests/ident/fit_rate_test.cc
-// checks it against the simulator):
+// fits it and finds the truth it was simulated from):
 //  - row j's time is the mean of its rows' times (their middle), and each
 //    output is their mean, which is the output at that time to within
 //    (factor^2 - 1) h^2 / 24 |y''| (h the row spacing: 3.1e-6 s^2 |y''| for
