@@ -2,13 +2,15 @@
 // issue 13).
 //
 // A round that adds nothing may hold a refit that is significant and removes
-// a material share of its channels' excess error (min_share_to_pair, 0.2),
+// a material share of its channels' excess error (min_share_to_pair, 0.1),
 // but carries one of its own parameters to a bound: the effect pushed past
 // its range stands in for a second one beside it (measured, controllers'
 // study seeds 8901 and 8902: a stabilizer bar beside a swashplate bias, the
 // bar's T_b at its 10 s bound, its slow tilt taking the bias's place; the
-// confusion study's 11966: a bar at its bound removing 0.24 beside a CG
-// offset; no other candidate qualified alone). The round is then refitted with that candidate (the first) in the
+// confusion study's 11966 and the controllers' 11031: a bar at its bound
+// removing 0.196 and 0.144 beside a CG offset at the fit rate; no other
+// candidate qualified alone). The round is then refitted with that
+// candidate (the first) in the
 // model: every other candidate scored and the shortlisted ones refitted
 // against the model with it, on the gates of discovery.h. The one chosen
 // there (the second) is added with the first when, at their joint refit,
