@@ -20,6 +20,10 @@ enum StateIndex : int {
 // order, then the accelerometer's specific force ax, ay, az.
 inline constexpr int kNumFlightChannels = kNumStates + 3;
 enum FlightChannel : int { kAx = kNumStates, kAy, kAz };
+// The Euler angles, whose differences are taken on the circle.
+inline bool IsEulerAngle(int state_or_channel) {
+  return state_or_channel == kPhi || state_or_channel == kTheta || state_or_channel == kPsi;
+}
 // "x", "y", ..., "r": the log-format column names of the states.
 const char* StateName(int index);
 

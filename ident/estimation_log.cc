@@ -9,6 +9,13 @@
 
 namespace coaxid {
 
+double EstimationLog::MedianRowSpacing() const {
+  std::vector<double> dt;
+  for (int k = 1; k < NumRows(); ++k) dt.push_back(inputs.time(k) - inputs.time(k - 1));
+  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
+  return dt[dt.size() / 2];
+}
+
 int EstimationLog::ChannelColumn(int channel) const {
   for (int c = 0; c < NumChannels(); ++c) {
     if (channels[c] == channel) return c;

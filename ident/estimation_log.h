@@ -32,6 +32,8 @@ struct EstimationLog {
   // The log's row (0-based) where row `row` starts, for messages.
   int LogRow(int row) const { return first_log_row + log_rows_per_row * row; }
   int NumChannels() const { return static_cast<int>(channels.size()); }
+  // The median time between consecutive rows [s] (at least two rows).
+  double MedianRowSpacing() const;
   // Column of `channel` in values, or -1.
   int ChannelColumn(int channel) const;
 };

@@ -10,18 +10,6 @@
 namespace coaxid {
 namespace {
 
-bool IsEulerAngle(int flight_channel) {
-  return flight_channel == kPhi || flight_channel == kTheta || flight_channel == kPsi;
-}
-
-// The median row spacing [s].
-double MedianSpacing(const std::vector<double>& t) {
-  std::vector<double> dt(t.size() - 1);
-  for (size_t k = 0; k + 1 < t.size(); ++k) dt[k] = t[k + 1] - t[k];
-  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
-  return dt[dt.size() / 2];
-}
-
 // The mean of the zero-order-hold input over [a, b), b > a.
 InputVector MeanInput(const InputHold& hold, double a, double b) {
   InputVector sum{};
@@ -53,7 +41,7 @@ int RowsPerFitRow(const EstimationLog& log, double fit_rate_hz, std::string* why
   if (!(fit_rate_hz > 0)) return keep("fitted at its own rate");
   if (log.NumRows() < 4) return keep("too few rows to average");
   const std::vector<double>& t = log.inputs.times();
-  const double h = MedianSpacing(t);
+  const double h = log.MedianRowSpacing();
   for (size_t k = 0; k + 1 < t.size(); ++k) {
     if (std::fabs((t[k + 1] - t[k]) - h) > 0.01 * h) {
       return keep("fitted at its own rate: its rows are not evenly spaced (row " +
@@ -125,7 +113,7 @@ std::vector<LogAtFitRate> AtFitRate(const std::vector<EstimationLog>& logs, doub
     a.rows_averaged = RowsPerFitRow(log, fit_rate_hz, &why_not);
     a.log = AverageRows(log, a.rows_averaged);
     if (log.kind == LogKind::kFlight && log.NumRows() >= 2)
-      a.log_rate_hz = 1.0 / MedianSpacing(log.inputs.times());
+      a.log_rate_hz = 1.0 / log.MedianRowSpacing();
     a.note = log.kind != LogKind::kFlight
                  ? log.source + ": " + why_not
                  : log.source + ": " + Hz(a.log_rate_hz) + ", " +

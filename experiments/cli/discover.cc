@@ -27,11 +27,11 @@ DEFINE_int32(max_added, 4, "discover: add at most this many effects");
 DEFINE_double(min_share_of_excess, 0.3,
               "discover: the least share of its channels' excess error (rms^2 - noise^2) an "
               "effect must remove, on the estimation and the held-out data, to be added");
-DEFINE_double(min_share_to_pair, 0.1,
+DEFINE_double(min_share_to_pair, coaxid::DiscoveryOptions().min_share_to_pair,
               "discover: a round that adds nothing is refitted beside a significant refit at "
               "its own bound that removes at least this share of its channels' excess error "
               "(never above --min_share_of_excess)");
-DEFINE_double(fit_rate_hz, 100,
+DEFINE_double(fit_rate_hz, coaxid::DiscoveryOptions().fit_rate_hz,
               "discover: fit flight logs sampled faster than this [Hz] with runs of their rows "
               "averaged (pairs at 200 Hz; each fit costs half); 0: every log at its own rate");
 DECLARE_double(segment_s);

@@ -12,7 +12,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-bool IsAngleChannel(int channel) { return channel == kPhi || channel == kTheta || channel == kPsi; }
 
 // To (-pi, pi].
 double WrapAngle(double a) { return a - 2 * M_PI * std::floor((a + M_PI) / (2 * M_PI)); }
@@ -220,7 +219,7 @@ bool EkfFilter::Update(EkfTally* tally) {
   auto innovation_of = [&](int c) {
     const int channel = log.channels[c];
     const double innovation = log.values(k, c) - y_hat_[channel];
-    return IsAngleChannel(channel) ? WrapAngle(innovation) : innovation;
+    return IsEulerAngle(channel) ? WrapAngle(innovation) : innovation;
   };
   s_.held = NextHeldInput(s_.held, pb_.vehicle.model.InputLags(propagator_.theta().data()),
                           log.inputs.input(k), t1);

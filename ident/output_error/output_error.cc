@@ -54,17 +54,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double MedianStep(const EstimationLog& log) {
-  std::vector<double> dt;
-  for (int k = 1; k < log.NumRows(); ++k) dt.push_back(log.inputs.time(k) - log.inputs.time(k - 1));
-  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
-  return dt[dt.size() / 2];
-}
-
 // Segment start rows for segments of about `seconds`; the log's last row ends
 // the last segment, which is merged into the one before if shorter than half.
 std::vector<int> SegmentStarts(const EstimationLog& log, double seconds) {
-  const int n = std::max(2, static_cast<int>(std::lround(seconds / MedianStep(log))));
+  const int n = std::max(2, static_cast<int>(std::lround(seconds / log.MedianRowSpacing())));
   const int last_row = log.NumRows() - 1;
   std::vector<int> starts;
   for (int s = 0; s < last_row; s += n) starts.push_back(s);
