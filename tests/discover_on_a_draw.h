@@ -1,6 +1,6 @@
 // A fixture for the CLI tests of the closing loop on one randomised draw of a
-// study spec (experiments/studies/random_draw.h): its flight, balance and
-// held-out logs simulated into the test's folder and `coaxid discover` run on
+// study spec (experiments/studies/random_draw.h): its flight, balance (if
+// drawn) and held-out logs simulated into the test's folder and `coaxid discover` run on
 // them the way a user would.
 #pragma once
 
@@ -33,15 +33,16 @@ class DiscoverOnADraw : public CliTestDir {
                          "/configs/studies/discover_controllers.yaml");
   }
 
-  // discovery.json of `coaxid discover` on the draw's flight and balance logs
-  // (draw.scenarios, in that order) with its held-out flight; null, with a
-  // test failure, when the draw lacks one of them or the program fails. The
-  // logs and outputs go to the test's folder, their names led by `prefix`.
+  // discovery.json of `coaxid discover` on the draw's flight log (and its
+  // balance log, if it has one: draw.scenarios, in that order) with its
+  // held-out flight; null, with a test failure, when the draw lacks the
+  // flight or the held-out flight, or the program fails. The logs and
+  // outputs go to the test's folder, their names led by `prefix`.
   nlohmann::json Discover(const StudySpec& spec, const RandomDraw& draw,
                           const std::string& prefix = "") {
-    if (draw.scenarios.size() != 2 || !draw.has_held_out) {
+    if (draw.scenarios.empty() || draw.scenarios.size() > 2 || !draw.has_held_out) {
       ADD_FAILURE() << "the draw holds " << draw.scenarios.size()
-                    << " estimation logs (a flight and a balance wanted) and "
+                    << " estimation logs (a flight, and a balance log or none, wanted) and "
                     << (draw.has_held_out ? "a" : "no") << " held-out flight";
       return nullptr;
     }
@@ -49,11 +50,11 @@ class DiscoverOnADraw : public CliTestDir {
       WriteLog(Path(name), SimulateScenario(MakeTruthVehicle(spec.config, s), s));
       return Path(name);
     };
-    const std::string flight = simulate(draw.scenarios.at(0), prefix + "flight.csv");
-    const std::string balance = simulate(draw.scenarios.at(1), prefix + "balance.csv");
+    std::string logs = simulate(draw.scenarios.at(0), prefix + "flight.csv");
+    if (draw.scenarios.size() == 2) logs += "," + simulate(draw.scenarios.at(1), prefix + "balance.csv");
     const std::string held_out = simulate(draw.held_out, prefix + "held_out.csv");
-    const RunResult run = RunCoaxid("discover --config=" + config_ + " --logs=" + flight + "," +
-                                    balance + " --validate=" + held_out +
+    const RunResult run = RunCoaxid("discover --config=" + config_ + " --logs=" + logs +
+                                    " --validate=" + held_out +
                                     " --noise_relaxations=1 --out=" + Path(prefix + "out"));
     if (run.status != 0) {
       ADD_FAILURE() << run.output;

@@ -11,17 +11,20 @@ namespace {
 
 // The refit of the round at its own bound that is significant and removes
 // at least min_share_to_pair of its channels' excess (estimation data), the
-// one removing the most excess error over all channels; -1: none.
-int FirstAtItsBound(const RoundRefits& round, const std::vector<CandidateScore>& scores,
-                    const DiscoveryOptions& o) {
+// one removing the most excess error over all channels; or the round's
+// dominant refit that held back a qualifying one without being significant
+// (round_choice.h), when it removes the most. -1: none.
+int FirstOfAPair(const RoundRefits& round, const std::vector<CandidateScore>& scores,
+                 const DiscoveryOptions& o) {
   const double level = WaldLevel(o, round.shortlist.size());
   const double min_share = std::min(o.min_share_to_pair, o.min_share_of_excess);
   int first = -1;
   for (size_t k = 0; k < round.refits.size(); ++k) {
     const CandidateScore& s = scores[round.shortlist[k]];
-    if (!round.refits[k].ok || s.plausible || !(s.wald_p_value < level) ||
-        !(s.channels_excess >= o.min_channels_excess) ||
-        !(s.share_of_excess >= min_share)) {
+    const bool at_its_bound = !s.plausible && s.wald_p_value < level;
+    const bool dominant = static_cast<int>(k) == round.choice.dominant;
+    if (!round.refits[k].ok || !(at_its_bound || dominant) ||
+        !(s.channels_excess >= o.min_channels_excess) || !(s.share_of_excess >= min_share)) {
       continue;
     }
     if (first < 0 || round.refits[k].share_of_all_excess > round.refits[first].share_of_all_excess) {
@@ -48,14 +51,20 @@ PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& no
                               const DiscoveryOptions& o, int round_number,
                               DiscoveryClock::time_point start) {
   PairedRefit pair;
-  const int k = FirstAtItsBound(round, *scores, o);
+  const int k = FirstOfAPair(round, *scores, o);
   if (k < 0) return pair;
   CandidateScore& first = (*scores)[round.shortlist[k]];
   const CandidateRefit& with_first = round.refits[k];
   pair.first = first.effect;
-  Say(o, "discover: " + first.effect + "'s refit is significant and removes " +
-             NumberText(100 * first.share_of_excess, "%.0f") +
-             " % of its channels' excess error, but " + first.why_implausible +
+  const bool significant = first.wald_p_value < WaldLevel(o, round.shortlist.size());
+  Say(o, "discover: " + first.effect + "'s refit " + (significant ? "is significant and " : "") +
+             "removes " + NumberText(100 * first.share_of_excess, "%.0f") +
+             " % of its channels' excess error (" +
+             NumberText(100 * with_first.share_of_all_excess, "%.0f") +
+             " % over all channels), but " +
+             (significant ? first.why_implausible
+                          : "it is not significant (cluster-robust Wald p = " +
+                                NumberText(first.wald_p_value, "%.3g") + ")") +
              ": refitting the round with it in the model, for an effect beside it");
   ModelSnapshot at_first = with_first.snapshot;
   AddValidation(validation, o, &at_first);

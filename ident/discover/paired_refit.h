@@ -9,8 +9,11 @@
 // bar's T_b at its 10 s bound, its slow tilt taking the bias's place; the
 // confusion study's 11966 and the controllers' 11031: a bar at its bound
 // removing 0.196 and 0.144 beside a CG offset at the fit rate; no other
-// candidate qualified alone). The round is then refitted with that
-// candidate (the first) in the
+// candidate qualified alone). Or it may hold a refit that is not
+// significant but removes materially more of the excess over all channels
+// than the one that qualifies, which it held back (round_choice.h: wind
+// beside a missing ground effect, seed 21253). The round is then refitted
+// with that candidate (the first) in the
 // model: every other candidate scored and the shortlisted ones refitted
 // against the model with it, on the gates of discovery.h. The one chosen
 // there (the second) is added with the first when, at their joint refit,

@@ -15,16 +15,20 @@ RoundChoice ChooseOfRound(const std::vector<RefitOfRound>& refits, double wald_l
                                            refits[c.added].score->excess_removed_all_channels)) {
       c.added = i;
     }
-    const bool dominant_at_bound = !s.plausible && s.wald_p_value < wald_level &&
+    const bool significant = s.wald_p_value < wald_level;
+    const bool dominant_at_bound = !s.plausible && significant &&
                                    s.channels_excess >= min_channels_excess &&
                                    r.share_of_all_excess >= decisive_share;
-    if (dominant_at_bound &&
+    const bool dominant_not_significant = !significant &&
+                                          s.channels_excess >= min_channels_excess &&
+                                          r.share_of_all_excess >= min_share_of_excess;
+    if ((dominant_at_bound || dominant_not_significant) &&
         (c.dominant < 0 || r.share_of_all_excess > refits[c.dominant].share_of_all_excess)) {
       c.dominant = i;
     }
   }
   // The excess over all channels the best qualifying refit leaves, and how
-  // much of it the one at a bound removes.
+  // much of it the dominant one removes.
   const auto removes_materially_more = [&] {
     const double left = 1 - refits[c.added].share_of_all_excess;
     const double more =

@@ -288,21 +288,27 @@ std::vector<RefitOfRound> Judged(const RoundRefits& r, const std::vector<Candida
 }
 
 // What the round adds of r's refits, at the Wald level of `family`; a
-// qualifying refit vetoed by one at a bound is marked so and reported.
+// qualifying refit vetoed by a dominant one (at a bound, or not significant)
+// is marked so and reported.
 void ChooseAndSay(RoundRefits* r, size_t family, std::vector<CandidateScore>* scores,
                   const DiscoveryOptions& o) {
-  r->choice = ChooseOfRound(Judged(*r, *scores), WaldLevel(o, family), o.min_channels_excess,
+  const double level = WaldLevel(o, family);
+  r->choice = ChooseOfRound(Judged(*r, *scores), level, o.min_channels_excess,
                             o.decisive_share_of_all_excess, o.min_share_of_excess);
   if (r->choice.vetoed >= 0) {
     CandidateScore& s = (*scores)[r->shortlist[r->choice.vetoed]];
     const CandidateScore& d = (*scores)[r->shortlist[r->choice.dominant]];
     s.confirmed = false;
+    const std::string how =
+        d.wald_p_value < level
+            ? "with a parameter at its bound (" + d.why_implausible + ")"
+            : "though not significant (cluster-robust Wald p = " +
+                  NumberText(d.wald_p_value, "%.3g") + ", level " + NumberText(level, "%.3g") + ")";
     s.why_not_confirmed =
         "it removes " + NumberText(100 * r->refits[r->choice.vetoed].share_of_all_excess, "%.0f") +
         " % of the excess error over all channels, " + d.effect + " " +
-        NumberText(100 * r->refits[r->choice.dominant].share_of_all_excess, "%.0f") +
-        " % with a parameter at its bound (" + d.why_implausible +
-        "): the missing physics is neither alone";
+        NumberText(100 * r->refits[r->choice.dominant].share_of_all_excess, "%.0f") + " % " + how +
+        ": the missing physics is neither alone";
     Say(o, "discover: " + s.effect + " is not added: " + s.why_not_confirmed);
   }
 }
