@@ -16,7 +16,8 @@
 # Use seeds no study has judged or timed (docs/discover_confusion.md lists
 # them; 20000-20059, 20100-20179, 20200-20279, 20300-20379, 20400-20479,
 # 20500-20579, 20580-20659, 20660-20739, 20740-20819, 20820-20899,
-# 20900-20979, 20980-21059, 21060-21139, 21140-21219 are taken).
+# 20900-20979, 20980-21059, 21060-21139, 21140-21219, 21220-21299,
+# 21300-21379 are taken).
 # Run on an idle machine: the numbers are wall times. Needs bc and python3.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
