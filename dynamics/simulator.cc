@@ -17,9 +17,10 @@ IntegratorOptions AugmentedOptions(const IntegratorOptions& options, int n) {
   return augmented;
 }
 
-// h ||A||_inf above which an interval's sensitivities leave the RK4 step:
-// below its real-axis stability limit 2.79, where it still damps a mode of
-// h lambda = -2 to 1/3 a step (exactly: e^-2 = 0.14).
+// h |lambda| above which an interval leaves the RK4 step (the state's by its
+// stages, the sensitivities' by rk4_stability.h): below the step's real-axis
+// stability limit 2.79, where it still damps a mode of h lambda = -2 to 1/3
+// a step (exactly: e^-2 = 0.14).
 constexpr double kMaxRungeKuttaStiffness = 2.0;
 
 }  // namespace
@@ -30,7 +31,8 @@ Simulator::Simulator(const VehicleModel& model, const Eigen::VectorXd& theta,
     : ode_(model, theta, std::move(sensitivity_parameters)),
       options_(options),
       sensitivity_options_(sensitivities),
-      method_(method) {
+      method_(method),
+      stability_(kMaxRungeKuttaStiffness) {
   const bool wanted = sensitivities.wrt_initial_state || sensitivities.wrt_parameters;
   if (wanted && method == SensitivityMethod::kRungeKuttaPerHold) {
     const int n = ode_.NumStates(), p = sensitivities.wrt_parameters
@@ -87,6 +89,7 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
   // A run is a function of its arguments alone (the same point simulated
   // twice gives the same numbers).
   integrator_->ForgetStepHint();
+  stability_.Reset();
   Eigen::VectorXd x = x0, x_start(n);
   Eigen::VectorXd z(variational_ ? variational_->NumStates() : 0);
   for (int k = first; k < last; ++k) {
@@ -172,6 +175,7 @@ bool Simulator::RungeKuttaStateStep(double t0, double t1, Eigen::VectorXd* x) {
 bool Simulator::FallBack(double t0, double t1, const Eigen::VectorXd& x0, Eigen::VectorXd* x,
                          Eigen::MatrixXd* S) {
   const int n = ode_.NumStates();
+  ++fallback_intervals_;
   if (!fallback_) {
     fallback_system_ = std::make_unique<VariationalSystem>(
         ode_, sensitivity_options_.wrt_initial_state, sensitivity_options_.wrt_parameters);
@@ -205,15 +209,12 @@ bool Simulator::StepSensitivities(double t0, double t1, const Eigen::VectorXd& x
     return false;
   }
   // One RK4 step is stable only while h |lambda| stays inside its stability
-  // region (-2.79 on the real axis, +-2.83 on the imaginary one); the largest
-  // absolute row sum bounds |lambda| (Gershgorin). A stiffer interval (a
-  // wild trial point: measured h ||A|| up to 1000 at a refit restarting
-  // declared parameters, with sensitivities grown to 1e8 along the segment)
-  // goes to the variational equations, whose steps follow the state's.
-  auto stiffness = [h](const Eigen::MatrixXd& A) {
-    return h * A.cwiseAbs().rowwise().sum().maxCoeff();
-  };
-  if (std::max({stiffness(w.A0), stiffness(w.Am), stiffness(w.A1)}) > kMaxRungeKuttaStiffness) {
+  // region (dynamics/rk4_stability.h). A stiffer interval (a wild trial
+  // point: measured h ||A|| up to 1000 at a refit restarting declared
+  // parameters, with sensitivities grown to 1e8 along the segment) goes to
+  // the variational equations, whose steps follow the state's.
+  if (!stability_.Stable(h, w.A0) || !stability_.Stable(h, w.Am) ||
+      !stability_.Stable(h, w.A1)) {
     return false;
   }
   // dS/dt = A S + [0 | B].

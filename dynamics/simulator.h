@@ -15,6 +15,7 @@
 
 #include "dynamics/integrator.h"
 #include "dynamics/rk4.h"
+#include "dynamics/rk4_stability.h"
 #include "dynamics/variational_system.h"
 #include "dynamics/vehicle_ode.h"
 
@@ -84,6 +85,10 @@ class Simulator {
   const Integrator& integrator() const { return *integrator_; }
   // Number of sensitivity columns (0 without sensitivities).
   int num_sensitivities() const { return columns_; }
+  // kRungeKuttaPerHold: hold intervals whose sensitivities went to the
+  // variational equations (the RK4 step failed or was not stable there),
+  // since construction.
+  long fallback_intervals() const { return fallback_intervals_; }
 
  private:
   VehicleOde ode_;
@@ -105,6 +110,8 @@ class Simulator {
   // classic RK4 step from *S, given the state at both ends.
   bool StepSensitivities(double t0, double t1, const Eigen::VectorXd& x0,
                          const Eigen::VectorXd& x1, Eigen::MatrixXd* S);
+  Rk4StabilityTest stability_;  // of the sensitivities' step, on the model's Jacobians
+  long fallback_intervals_ = 0;
   struct RungeKuttaScratch {
     Eigen::VectorXd f0, f1, xm;
     Eigen::MatrixXd A0, Am, A1, B0, Bm, B1, K1, K2, K3, K4, Stage;
