@@ -4,6 +4,7 @@
 // them the way a user would.
 #pragma once
 
+#include <cstdint>
 #include <fstream>
 #include <string>
 
@@ -62,6 +63,20 @@ class DiscoverOnADraw : public CliTestDir {
     }
     std::ifstream in(Path(prefix + "out/discovery.json"));
     return nlohmann::json::parse(in);
+  }
+
+  // The confusion spec's draw of `seed` (*draw), which must be flight only
+  // and hold `truth`, through Discover; null, with a test failure, if not.
+  nlohmann::json DiscoverFlightOnly(uint64_t seed, const std::string& truth, RandomDraw* draw) {
+    const StudySpec spec = ConfusionSpec();
+    *draw = DrawRun(spec, seed);
+    if (draw->truth_label != truth || draw->scenarios.size() != 1) {
+      ADD_FAILURE() << "seed " << seed << " draws " << draw->truth_label << " with "
+                    << draw->scenarios.size() << " estimation logs (" << truth
+                    << ", flight only, wanted)";
+      return nullptr;
+    }
+    return Discover(spec, *draw);
   }
 };
 

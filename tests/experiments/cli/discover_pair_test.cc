@@ -95,11 +95,8 @@ TEST_F(DiscoverPairCli, ACgOffsetBesideABarAtItsBoundIsAddedWithIt) {
 // nothing is ever removed. Both effects' parameters within 3 std of the
 // truth (wd: not identifiable here, within 0.5 m/s of the truth's 0).
 TEST_F(DiscoverPairCli, WindThatIsNotSignificantAloneHoldsBackAStandInAndIsAddedAsAPair) {
-  const StudySpec spec = ConfusionSpec();
-  const RandomDraw draw = DrawRun(spec, 21253);
-  ASSERT_EQ(draw.truth_label, "ground_effect+wind");
-  ASSERT_EQ(draw.scenarios.size(), 1u);  // flight only
-  const nlohmann::json j = Discover(spec, draw);
+  RandomDraw draw;
+  const nlohmann::json j = DiscoverFlightOnly(21253, "ground_effect+wind", &draw);
   ASSERT_FALSE(j.is_null());
   std::vector<std::string> added = j["added"].get<std::vector<std::string>>();
   std::sort(added.begin(), added.end());

@@ -57,11 +57,8 @@ TEST_F(DiscoverSymptomCli, AnInertiaFarAboveItsPhysicalRangeIsRestartedAndTheBar
 // truth (1.74 s, 0.83; d_u is held to the flight-only scale and lands 19 %
 // low, as the draw's d does).
 TEST_F(DiscoverSymptomCli, ABarAtItsBoundFromEitherStartIsFoundFromBothAtOnce) {
-  const StudySpec spec = ConfusionSpec();
-  const RandomDraw draw = DrawRun(spec, 21453);
-  ASSERT_EQ(draw.truth_label, "stabilizer_bar");
-  ASSERT_EQ(draw.scenarios.size(), 1u);  // flight only
-  const nlohmann::json j = Discover(spec, draw);
+  RandomDraw draw;
+  const nlohmann::json j = DiscoverFlightOnly(21453, "stabilizer_bar", &draw);
   ASSERT_FALSE(j.is_null());
   EXPECT_EQ(j["added"], nlohmann::json::array({"stabilizer_bar"}));
   bool from_both = false;
