@@ -62,23 +62,28 @@ bool AutodiffJacobian(const F& f, const Eigen::VectorXd& theta, const double* x,
     const int last = std::min(first + kAutodiffChunk, num_directions);
     for (int dir = first; dir < last; ++dir) seed(dir, first, 1.0);
     f(theta_jet.data(), x_jet.data(), y_jet.data());
+    for (int dir = first; dir < last; ++dir) seed(dir, first, 0.0);
     for (int row = 0; row < ny; ++row) {
       if (!std::isfinite(y_jet[row].a)) return false;
       if (y && first == 0) y[row] = y_jet[row].a;
-      for (int dir = first; dir < last; ++dir) {
-        const double value = y_jet[row].v[dir - first];
-        if (!std::isfinite(value)) return false;
-        if (dir < nx_dirs) {
-          (*dydx)(row, dir) = value;
-        } else {
-          (*dydp)(row, dir - nx_dirs) = value;
-        }
-      }
     }
-    for (int dir = first; dir < last; ++dir) seed(dir, first, 0.0);
+    // Column by column (each column of dy/dx and dy/dp is contiguous),
+    // checked once at the end.
+    for (int dir = first; dir < last; ++dir) {
+      double* column = dir < nx_dirs ? dydx->data() + static_cast<size_t>(dir) * ny
+                                     : dydp->data() + static_cast<size_t>(dir - nx_dirs) * ny;
+      for (int row = 0; row < ny; ++row) column[row] = y_jet[row].v[dir - first];
+    }
     first = last;
   } while (first < num_directions);
-  return true;
+  // value * 0 is NaN exactly for a value that is not finite, and a NaN
+  // survives the (vectorised) sum. A test per value (or Eigen's allFinite,
+  // one value at a time) was a third of the call's own time: a state
+  // Jacobian with 12 unknowns 1080 -> 950 ns (bench/dynamics/model_bench.cc).
+  auto all_finite = [](const Eigen::MatrixXd* m) {
+    return m == nullptr || (m->array() * 0.0).sum() == 0;
+  };
+  return all_finite(dydx) && all_finite(dydp);
 }
 
 }  // namespace coaxid

@@ -18,6 +18,7 @@
 //   |AD - FD| <= 1e-6 * max_i |FD_ij| + 100 eps S_i / h_j,
 // a million times the truncation error and 100 times the rounding bound, and
 // far below any real Jacobian error (a wrong or swapped column is O(1) wrong).
+#include "dynamics/autodiff.h"
 #include "dynamics/model_jacobian.h"
 
 #include <gtest/gtest.h>
@@ -280,6 +281,35 @@ TEST(ModelJacobianTest, ReportsNonFiniteDerivatives) {
   const Case c = NearHoverCases(5005u, 1)[0];
   Eigen::MatrixXd dfdx, dfdp;
   EXPECT_FALSE(DerivativeJacobians(v.model, theta, c.x.data(), HeldInput::Steady(c.input, 0), 0, {kAlpha}, &dfdx, &dfdp));
+}
+
+// A finite value with a derivative that is not (sqrt at 0), in either block
+// and in any pass, is reported: the derivatives' check is a separate one
+// from the values' (dynamics/autodiff.h).
+TEST(ModelJacobianTest, ReportsANonFiniteDerivativeOfAFiniteValue) {
+  // y0 = theta_k * x0, y1 = sqrt(x_j) + sqrt(theta_m): at x_j = 0 (theta_m =
+  // 0) the value is 0 and dy1/dx_j (dy1/dtheta_m) infinite.
+  const int nx = 11;  // beyond one pass of kAutodiffChunk directions
+  auto f = [](const auto* th, const auto* x, auto* y) {
+    using std::sqrt;
+    y[0] = th[0] * x[0];
+    y[1] = sqrt(x[nx - 1]) + sqrt(th[2]);
+  };
+  const Eigen::VectorXd theta = (Eigen::VectorXd(3) << 2.0, 3.0, 1.0).finished();
+  std::vector<double> x(nx, 1.0);
+  double y[2];
+  Eigen::MatrixXd dydx, dydp;
+  ASSERT_TRUE(AutodiffJacobian(f, theta, x.data(), nx, 2, {0, 2}, y, &dydx, &dydp));
+  EXPECT_DOUBLE_EQ(dydx(0, 0), 2.0);
+  EXPECT_DOUBLE_EQ(dydx(1, nx - 1), 0.5);
+  EXPECT_DOUBLE_EQ(dydp(0, 0), 1.0);
+  EXPECT_DOUBLE_EQ(dydp(1, 1), 0.5);
+  x[nx - 1] = 0.0;  // in the second pass's directions
+  EXPECT_FALSE(AutodiffJacobian(f, theta, x.data(), nx, 2, {0, 2}, y, &dydx, &dydp));
+  x[nx - 1] = 1.0;
+  Eigen::VectorXd at_zero = theta;
+  at_zero[2] = 0.0;
+  EXPECT_FALSE(AutodiffJacobian(f, at_zero, x.data(), nx, 2, {0, 2}, nullptr, nullptr, &dydp));
 }
 
 // A rotor pushing down (a trial point of a refit far from the truth) makes eq. 46's radicand negative and large; written as radicand +
