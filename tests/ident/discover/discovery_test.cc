@@ -80,6 +80,45 @@ TEST(DiscoverResiduals, WhiteNoiseIsWhiteAndAStepIsNot) {
   }
 }
 
+// A balance log beside a flight log keeps its channels in the residual
+// tests: its rows hold no state to correlate with, and none is asked of
+// them (with the states of every flight log asked of every row, each
+// balance channel came out with no residual at all, and the loop judged
+// flight + balance runs on the flight channels alone: seed 11782 of the
+// controllers' study). The flight channels are still correlated with the
+// states.
+TEST(DiscoverResiduals, ABalanceLogBesideAFlightLogKeepsItsChannels) {
+  const EstimationLog balance = MakeEstimationLog(BalanceLog(Truth({}), 3));
+  EstimationLog flight = balance;  // its inputs, and two state channels
+  flight.kind = LogKind::kFlight;
+  flight.channels = {kPhi, kTheta};
+  flight.channel_names = {"phi", "theta"};
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0, 1);
+  flight.values.resize(balance.NumRows(), 2);
+  for (int k = 0; k < flight.NumRows(); ++k) {
+    flight.values(k, 0) = noise(rng);
+    flight.values(k, 1) = noise(rng);
+  }
+  // The model leaves white noise of 0.01 on every channel of both logs.
+  std::vector<Eigen::MatrixXd> model = {flight.values, balance.values};
+  for (Eigen::MatrixXd& m : model) {
+    for (int k = 0; k < m.rows(); ++k) {
+      for (int c = 0; c < m.cols(); ++c) m(k, c) -= noise(rng) * 0.01;
+    }
+  }
+  const std::vector<ChannelResidualTest> tests = AnalyseResiduals({flight, balance}, model);
+  ASSERT_EQ(tests.size(), 2u + static_cast<size_t>(balance.NumChannels()));
+  for (const ChannelResidualTest& t : tests) {
+    EXPECT_EQ(t.count, balance.NumRows()) << t.channel;
+    EXPECT_NEAR(t.noise_std, 0.01, 0.002) << t.channel;
+    const bool is_state = t.channel == "phi" || t.channel == "theta";
+    bool with_a_state = false;
+    for (const Correlation& c : t.correlations) with_a_state |= c.with == "phi" || c.with == "theta";
+    EXPECT_EQ(with_a_state, is_state) << t.channel;
+  }
+}
+
 TEST(Discover, FindsWakeInterferenceAndOnlyIt) {
   const Vehicle truth = Truth({{"wake_interference", {{"k_T", Value(5e-6)}, {"k_Q", Value(1e-7)}}}});
   const DiscoveryResult r = DiscoverOn(BalanceLog(truth, 11), BalanceLog(truth, 12));
