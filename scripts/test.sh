@@ -43,8 +43,8 @@ if [ "${1:-}" = "--sanitize" ]; then
   # logs (9 s in Release, 211 s here; it passed under the sanitizers once);
   # its new code (SymptomaticParameters) runs here in its unit test.
   SANITIZE_SKIP+='|^DiscoverSymptomCli\.'
-  # The same with a paired refit (25-42 s in Release): RefitBesideABound
-  # runs in the Release tests only, as for ABarBesideASwashplateBiasIsFoundAsAPair.
+  # The same on two draws of a CG offset beside a bar, and with a paired
+  # refit (25-42 s in Release): RefitBesideABound runs in the Release tests only.
   SANITIZE_SKIP+='|^DiscoverPairCli\.'
   # The same for a declared fit that fails from the EKF start (5-10 s in
   # Release): the fallback is a branch of Discover, whose other paths run here.
@@ -60,9 +60,12 @@ if [ "${1:-}" = "--sanitize" ]; then
   SANITIZE_SKIP+='|^EkfEffectStates\.RefinedToTheTruthFromTwentyPercentOffOnRandomBars$'
   SANITIZE_SKIP+='|^DiscoverFlight\.ARefitThatDecidesItsRoundChangesNothingByLeavingOutTheRest$'
   SANITIZE_SKIP+='|^DiscoverFlight\.TheLoopIsTheSameOnOneThreadAndOnThree$'
-  # The whole loop with a paired refit (12 s in Release on the idle machine,
-  # minutes here): RefitBesideABound runs in the Release tests only.
-  SANITIZE_SKIP+='|^DiscoverFlight\.ABarBesideASwashplateBiasIsFoundAsAPair$'
+  # The whole loop on a bar beside a swashplate bias (12 s in Release on the
+  # idle machine, minutes here), and on two flights with wake interference
+  # (1.3-2.2 s in Release): their new code (the held-out gate, the separation
+  # floor) runs here in PracticalSignificance.* and LinearisedFit.*.
+  SANITIZE_SKIP+='|^DiscoverFlight\.ABarBesideASwashplateBiasAreBothFound$'
+  SANITIZE_SKIP+='|^DiscoverFlight\.WakeInterferenceIsFoundBesideAFlightLog$'
   # The four longest left (52-160 s each here at -O1, 2026-12-04), each with a
   # shorter test of the same code still here: the reconstruction on one
   # thread and on three (KinematicCliTest.FindsAGyroBias... runs it, on every

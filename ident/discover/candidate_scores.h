@@ -107,7 +107,8 @@ struct CandidateScore {
   // Practical significance (effects.md step 5): the share of its channels'
   // excess error, sum over them of (rms^2 - noise^2) / noise^2, that the
   // refit removes, on the estimation and the held-out data (NaN: no
-  // held-out data), and per channel (estimation data).
+  // held-out data, or none that can judge it: HeldOutShareOfExcessRemoved),
+  // and per channel (estimation data).
   double share_of_excess = 0;
   double share_of_excess_held_out = std::numeric_limits<double>::quiet_NaN();
   std::map<std::string, double> excess_removed;

@@ -280,13 +280,14 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
     r.effect = effect;
     r.made_redundant_by = itself ? std::string() : latest;
     r.round = round;
-    r.share_of_excess =
-        ShareOfExcessRemoved(snapshot.fit, now->fit, snapshot.residual_tests, channels).share;
+    const ExcessShare estimation_share =
+        ShareOfExcessRemoved(snapshot.fit, now->fit, snapshot.residual_tests, channels);
+    r.share_of_excess = estimation_share.share;
     r.share_of_excess_held_out =
-        validation.empty() ? NAN
-                           : ShareOfExcessRemoved(snapshot.validation, now->validation,
-                                                  snapshot.validation_residual_tests, channels)
-                                 .share;
+        validation.empty()
+            ? NAN
+            : HeldOutShareOfExcessRemoved(estimation_share, snapshot.validation, now->validation,
+                                          snapshot.validation_residual_tests, channels);
     Say(o, "  without " + effect + ", warm from the current fit (" +
                NumberText(SecondsSince(t0), "%.1f s") + "): it removes " +
                ShareText(r.share_of_excess, r.share_of_excess_held_out) +
@@ -717,10 +718,12 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
              "qualifies if its cluster-robust Wald p < alpha / refits, no parameter of it sits "
              "at a bound and it removes at least min_share_of_excess of its channels' excess "
              "error (an excess of at least min_channels_excess) on the estimation and the "
-             "held-out data; the qualifying refit that removes the most excess error over all "
-             "channels is added, unless a refit removes materially more of it (at least "
-             "min_share_of_excess of what the qualifying one leaves): significantly, with a "
-             "parameter of its own at a bound, and at least decisive_share_of_all_excess of it; "
+             "held-out data (the held-out data judge it when at least half of its gain on the "
+             "estimation data lies in channels they measure); the qualifying refit that removes "
+             "the most excess error over all channels is added, unless a refit removes "
+             "materially more of it (at least min_share_of_excess of what the qualifying one "
+             "leaves): significantly, with a parameter of its own at a bound, and at least "
+             "decisive_share_of_all_excess of it; "
              "or not significantly, and at least min_share_of_excess of it; a round that adds "
              "nothing but holds a significant refit that "
              "removes at least min_share_to_pair of its channels' excess error with a parameter "

@@ -8,8 +8,10 @@
 // meaningful (no parameter at a bound) and practically significant (it
 // removes at least min_share_of_excess of its channels' excess error, on the
 // estimation and on the held-out data, out of an excess of at least
-// min_channels_excess) and, of those, removes the most excess error over all
-// channels, unless a refit at a bound removes more, decisively
+// min_channels_excess; the held-out data judge it where at least half of
+// its gain lies in channels they measure, practical_significance.h) and, of
+// those, removes the most excess error over all channels, unless a refit at
+// a bound removes more, decisively
 // (round_choice.h); a round that adds nothing but holds a significant refit
 // at its own bound looks for the effect beside it (paired_refit.h); repeat
 // until none qualifies. A channel whose residual stays structured (Ljung-Box p
@@ -184,7 +186,7 @@ struct RemovedEffect {
   std::string made_redundant_by;  // the effect added in that round; empty: itself
   int round = 0;
   double share_of_excess = 0;           // what it still removed, estimation data
-  double share_of_excess_held_out = 0;  // NaN without held-out data
+  double share_of_excess_held_out = 0;  // NaN: no held-out data can judge it
 };
 
 struct DiscoveryResult {

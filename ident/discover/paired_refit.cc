@@ -105,13 +105,13 @@ PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& no
   for (const std::string& c : second.channels) {
     if (std::find(channels.begin(), channels.end(), c) == channels.end()) channels.push_back(c);
   }
-  pair.share_of_excess =
-      ShareOfExcessRemoved(now.fit, pair.joint.snapshot.fit, now.residual_tests, channels).share;
+  const ExcessShare estimation_share =
+      ShareOfExcessRemoved(now.fit, pair.joint.snapshot.fit, now.residual_tests, channels);
+  pair.share_of_excess = estimation_share.share;
   if (!validation.empty() && !pair.joint.snapshot.validation.empty()) {
-    pair.share_of_excess_held_out =
-        ShareOfExcessRemoved(now.validation, pair.joint.snapshot.validation,
-                             now.validation_residual_tests, channels)
-            .share;
+    pair.share_of_excess_held_out = HeldOutShareOfExcessRemoved(
+        estimation_share, now.validation, pair.joint.snapshot.validation,
+        now.validation_residual_tests, channels);
   }
   const double held_out = std::isfinite(pair.share_of_excess_held_out)
                               ? pair.share_of_excess_held_out

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/report_values.h"
 
@@ -33,9 +34,28 @@ ExcessShare ShareOfExcessRemoved(const std::map<std::string, FitError>& before,
     out.excess += excess / noise2;
     removed += (ms_before - ms_after) / noise2;
     out.per_channel[c] = excess > 0 ? (ms_before - ms_after) / excess : 0.0;
+    out.removed[c] = (ms_before - ms_after) / noise2;
   }
   out.share = out.excess > 0 ? removed / out.excess : 0.0;
   return out;
+}
+
+double HeldOutShareOfExcessRemoved(const ExcessShare& estimation,
+                                   const std::map<std::string, FitError>& before,
+                                   const std::map<std::string, FitError>& after,
+                                   const std::vector<ChannelResidualTest>& tests,
+                                   const std::vector<std::string>& channels) {
+  double gain = 0, gain_held_out = 0;
+  for (const auto& [channel, removed] : estimation.removed) {
+    if (!(removed > 0)) continue;
+    gain += removed;
+    const bool measured = std::any_of(tests.begin(), tests.end(), [&](const ChannelResidualTest& t) {
+      return t.channel == channel;
+    });
+    if (measured) gain_held_out += removed;
+  }
+  if (gain > 0 && gain_held_out < 0.5 * gain) return std::numeric_limits<double>::quiet_NaN();
+  return ShareOfExcessRemoved(before, after, tests, channels).share;
 }
 
 std::string ShareText(double share, double share_held_out) {

@@ -173,9 +173,8 @@ std::vector<CandidateRefit> RefitInRankOrder(
     if (!validation.empty() && WhyNotConfirmed(s, level, o).empty()) {
       AddValidation(validation, quiet, &refits[k].snapshot);
       s.share_of_excess_held_out =
-          ShareOfExcessRemoved(now.validation, refits[k].snapshot.validation,
-                               now.validation_residual_tests, s.channels)
-              .share;
+          HeldOutShareOfExcessRemoved(est, now.validation, refits[k].snapshot.validation,
+                                      now.validation_residual_tests, s.channels);
     }
     refits[k].ok = true;
     if (all.share >= o.decisive_share_of_all_excess && WhyNotConfirmed(s, level, o).empty()) {

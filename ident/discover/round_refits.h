@@ -52,7 +52,8 @@ double WaldLevel(const DiscoveryOptions& o, size_t refitted);
 std::string WhyNotSignificant(const CandidateScore& s, double level, const DiscoveryOptions& o);
 
 // Why a refitted candidate is not added (empty: it is), at the Wald level
-// `level`. Without a held-out share (NaN) the last gate reads the estimation
+// `level`. Without a held-out share (NaN: no held-out logs, or none whose
+// channels can judge it) the last gate reads the estimation
 // share alone; the held-out share only ever adds a condition to that gate.
 std::string WhyNotConfirmed(const CandidateScore& s, double level, const DiscoveryOptions& o);
 

@@ -13,9 +13,15 @@
 //    same, the bar removing 14 % (fitting every row its refit is not
 //    significant).
 // Refitted with the bar in the model (DiscoveryOptions::min_share_to_pair,
-// 0.1), the CG offset qualifies and the pair removes all of the excess. Both
-// fail with min_share_to_pair at the practical threshold (0.3), 11031 also
-// at 0.15.
+// 0.1), the CG offset qualified and the pair removed all of the excess (both
+// failed with min_share_to_pair at the practical threshold, 0.3, 11031 also
+// at 0.15). Since the held-out flight judges a refit only where its gain lies
+// in channels the flight measures (practical_significance.h), both are found
+// without the pair: the CG offset's refit alone removes 98 % of its channels'
+// excess, nearly all of it in the balance's L and M, and is added in round 1,
+// the bar in round 2. The test keeps both draws: both effects, within 3 std.
+// (A pair beside a bar at its bound still happens: seed 13276, flight only,
+// low, in the judged set of 2026-12-07; 50-90 s, too long for a test.)
 //
 // And a pair started from a refit that is not significant but removes far
 // more than the one that qualifies (ident/discover/round_choice.h), on seed
@@ -37,8 +43,8 @@ namespace {
 
 class DiscoverPairCli : public DiscoverOnADraw {
  protected:
-  // Both effects added by the paired refit, their five parameters within 3
-  // std of the draw's truth.
+  // Both effects added, their five parameters within 3 std of the draw's
+  // truth.
   void ExpectThePair(const StudySpec& spec, uint64_t seed) {
     const RandomDraw draw = DrawRun(spec, seed);
     ASSERT_EQ(draw.truth_label, "cg_offset+stabilizer_bar");
@@ -49,12 +55,7 @@ class DiscoverPairCli : public DiscoverOnADraw {
     ASSERT_EQ(added, (std::vector<std::string>{"cg_offset", "stabilizer_bar"}))
         << j["added"].dump();
     EXPECT_DOUBLE_EQ(j["settings"]["min_share_to_pair"].get<double>(), 0.1);
-    bool paired = false;
-    for (const nlohmann::json& c : j["candidates"]) {
-      paired |=
-          c["effect"] == "stabilizer_bar" && c.value("added_with", nlohmann::json()) == "cg_offset";
-    }
-    EXPECT_TRUE(paired) << "found, but not by the paired refit this test is for";
+    EXPECT_TRUE(j["removed"].empty()) << j["removed"].dump();
     // Every parameter of both effects within 3 of its reported std of the truth
     // (the flight and the balance fix the scale: d is estimated).
     std::map<std::string, double> truth;
@@ -75,7 +76,7 @@ class DiscoverPairCli : public DiscoverOnADraw {
   }
 };
 
-TEST_F(DiscoverPairCli, ACgOffsetBesideABarAtItsBoundIsAddedWithIt) {
+TEST_F(DiscoverPairCli, ACgOffsetBesideABarIsFoundWithIt) {
   const StudySpec confusion = ConfusionSpec(), controllers = ControllersSpec();
   for (const auto& [spec, seed] :
        {std::pair(&confusion, 11966u), std::pair(&controllers, 11031u)}) {

@@ -9,10 +9,11 @@
 // generic-dictionary candidate.
 //
 // wake_interference is tested on balance logs (discovery_test.cc, with
-// cg_offset, found in both): a flight measures only the total thrust and yaw
-// moment, where k_T omega1 omega2 and k_Q omega1 omega2 look like the loss
-// factor sigma at the near-equal rotor speeds of hover; only the balance's
-// per-rotor loads and single-rotor holds separate them. rotor_drag needs a
+// cg_offset, found in both) and on a flight beside a balance log: a flight
+// measures only the total thrust and yaw moment, where k_T omega1 omega2 and
+// k_Q omega1 omega2 look like the loss factor sigma at the near-equal rotor
+// speeds of hover; only the balance's per-rotor loads and single-rotor holds
+// separate them. rotor_drag needs a
 // flight designed for it: near hover the body drag absorbs it, in fast
 // transits with climbs discover finds it (its two tests below).
 #include <algorithm>
@@ -162,9 +163,12 @@ TEST_P(DiscoverFlightEffect, FindsItAndOnlyIt) {
   EXPECT_LT(after, 0.5 * before) << "held-out model error " << before << " -> " << after;
   for (const auto& [name, v] : c.truth) ExpectWithinThreeStd(r, run.truth, c.effect + "." + name);
   // The held-out share is computed only for refits that pass every gate on
-  // the estimation data; an added effect passed the held-out gate too.
+  // the estimation data; an added effect passed the held-out gate too, where
+  // the held-out flight can judge it (NaN: most of its gain lay in the
+  // balance's channels, as the wind's does: its refit lets Cx and Cy come
+  // back to what the balance's X and Y say).
   for (const CandidateScore& s : r.candidates) {
-    if (s.confirmed) {
+    if (s.confirmed && !std::isnan(s.share_of_excess_held_out)) {
       EXPECT_GE(s.share_of_excess_held_out, Options().min_share_of_excess) << s.effect;
     }
   }
@@ -290,11 +294,15 @@ TEST(DiscoverFlight, TwoEffectsAreBothFound) {
   EXPECT_EQ(added, (std::vector<std::string>{"gyroscopic", "wind"}));
 }
 
-TEST(DiscoverFlight, ABarBesideASwashplateBiasIsFoundAsAPair) {
-  // The library's typical bar and swashplate bias (paired_refit.h): alone,
-  // the bar's refit carries T_b to its bound (its slow tilt standing in for
-  // the bias) and no other refit qualifies; refitted with the bar in the
-  // model, the bias qualifies, and the bar comes back inside its bounds.
+TEST(DiscoverFlight, ABarBesideASwashplateBiasAreBothFound) {
+  // The library's typical bar and swashplate bias. Alone, the bar's refit
+  // carries T_b to its bound (its slow tilt standing in for the bias); the
+  // bias's refit removes 33 % of its channels' excess, most of it in the
+  // balance's L and M, which the held-out flight cannot judge
+  // (practical_significance.h), and is added in round 1, the bar in round 2.
+  // (Until the held-out gate judged only where the gain lies, the held-out
+  // flight rejected the bias and the pair was found by the paired refit,
+  // paired_refit.h.)
   const FlightRun run = DiscoverInFlight(
       {{"stabilizer_bar", {{"T_b", Value(1.8)}, {"k_b", Value(0.6)}, {"d_u", Value(0.165)}}},
        {"swashplate_bias", {{"b_x", Value(0.015)}, {"b_y", Value(-0.01)}}}},
@@ -302,14 +310,31 @@ TEST(DiscoverFlight, ABarBesideASwashplateBiasIsFoundAsAPair) {
   std::vector<std::string> added = run.result.added;
   std::sort(added.begin(), added.end());
   EXPECT_EQ(added, (std::vector<std::string>{"stabilizer_bar", "swashplate_bias"}));
-  bool paired = false;
-  for (const CandidateScore& s : run.result.candidates) {
-    paired |= s.effect == "stabilizer_bar" && s.added_with == "swashplate_bias";
-  }
-  EXPECT_TRUE(paired) << "found, but not by the paired refit this test is for";
+  EXPECT_TRUE(run.result.removed.empty());
   for (const char* name : {"stabilizer_bar.T_b", "stabilizer_bar.k_b", "swashplate_bias.b_x",
                            "swashplate_bias.b_y"}) {
     ExpectWithinThreeStd(run.result, run.truth, name);
+  }
+}
+
+// wake_interference beside a flight log: the short balance log separates it
+// from sigma (a flight sees k_T omega1 omega2 as a part of sigma's loss), and
+// its gain lies in the balance's channels, which the held-out flight does not
+// measure: the held-out flight cannot judge it (a NaN share), and the
+// estimation data decide. Measured before: its columns were called not
+// separable (a squared sine below a fixed 1e-6 of their size), or its refit
+// was rejected for removing "15 %" of the held-out flight's noise-level
+// excess (docs/discover_confusion.md, thirty-third session).
+TEST(DiscoverFlight, WakeInterferenceIsFoundBesideAFlightLog) {
+  for (uint64_t seed : {74, 75}) {
+    const FlightRun run = DiscoverInFlight(
+        {{"wake_interference", {{"k_T", Value(5e-6)}, {"k_Q", Value(1e-7)}}}}, false, seed);
+    ASSERT_EQ(run.result.added, std::vector<std::string>{"wake_interference"}) << "seed " << seed;
+    ExpectWithinThreeStd(run.result, run.truth, "wake_interference.k_T");
+    ExpectWithinThreeStd(run.result, run.truth, "wake_interference.k_Q");
+    for (const CandidateScore& s : run.result.candidates) {
+      if (s.confirmed) EXPECT_TRUE(std::isnan(s.share_of_excess_held_out)) << s.effect;
+    }
   }
 }
 

@@ -153,6 +153,34 @@ TEST(LinearisedFit, NearlyCollinearColumnNeverGivesAbsurdValues) {
   }
 }
 
+// A column that only a short block of rows separates from the nuisance
+// columns, as a balance log separates wake_interference beside a long flight:
+// its squared sine against them is about 1e-7 (a fixed floor of 1e-6 called
+// it not separable), far above what rounding leaves of it. Its score test
+// must find it (the 20 clusters of the separating rows carry its score:
+// T^2 about 20) and its step must be its coefficient, within 5 times the
+// 0.016 std its separated part gives with this noise.
+TEST(LinearisedFit, ColumnSeparatedByAFewRowsIsTestable) {
+  std::mt19937 rng(9);
+  std::normal_distribution<double> e(0, 1);
+  const int n = 8000, separated = 1000;
+  Eigen::MatrixXd J0(n, 2), Z(n, 1);
+  J0.col(0).setOnes();
+  J0.col(1) = Ar1(n, 0.9, &rng);
+  Z.col(0) = 2 * J0.col(1) - J0.col(0);
+  for (int k = n - separated; k < n; ++k) Z(k, 0) += 2e-3 * e(rng);
+  Eigen::VectorXd y = 1.0 * Z.col(0);
+  for (int k = 0; k < n; ++k) y[k] += 1e-3 * e(rng);
+  const LinearisedFit f = Linearise(J0, Z, y, 50);
+  const ColumnTester tester(f, {0, 1});
+  const ColumnTest t = tester.Test({2});
+  ASSERT_TRUE(t.ok) << t.why_not;
+  EXPECT_LT(t.p_value, 1e-3);
+  EXPECT_NEAR(t.step[0], 1.0, 0.08);
+  EXPECT_GE(t.predicted_rss_drop, 0.0);
+  EXPECT_LE(t.predicted_rss_drop, f.rss);
+}
+
 // A multiple-shooting problem shaped like the output-error one: two logs of
 // segments, each segment's rows depending on its own start state and the
 // parameters, a continuity tie coupling it to the next segment of its log,

@@ -62,5 +62,44 @@ TEST(PracticalSignificance, WeightedExcessIsInTheFitsWeightedUnits) {
   EXPECT_NEAR(WeightedExcess(tests, w), 75, 1e-12);
 }
 
+// Held-out logs judge a change where its gain on the estimation logs lies in
+// channels they measure (half of it or more), at their noise too; where it
+// lies in channels they do not measure (a balance log's, beside a held-out
+// flight), they cannot: NaN.
+TEST(PracticalSignificance, HeldOutLogsJudgeWhereTheGainLies) {
+  // Estimation: flight channel q (noise 1, ms 1.44 -> 1.2) and balance
+  // channel N (noise 1, ms 4 -> 1).
+  const std::vector<ChannelResidualTest> estimation_tests = {Residual("q", 1.2, 1, 100),
+                                                             Residual("N", 2, 1, 100)};
+  const std::map<std::string, FitError> estimation_before = {{"q", Rms(1.2)}, {"N", Rms(2)}};
+  const std::map<std::string, FitError> estimation_after = {{"q", Rms(std::sqrt(1.2))},
+                                                            {"N", Rms(1)}};
+  // Held-out flight: q only, at its noise, made a little worse.
+  const std::vector<ChannelResidualTest> held_out_tests = {Residual("q", 1.01, 1, 100)};
+  const std::map<std::string, FitError> held_out_before = {{"q", Rms(1.01)}};
+  const std::map<std::string, FitError> held_out_after = {{"q", Rms(1.02)}};
+  // Removed 0.24 in q and 3 in N: 7 % of the gain in what the held-out measures.
+  const ExcessShare both = ShareOfExcessRemoved(estimation_before, estimation_after,
+                                                estimation_tests, {"q", "N"});
+  EXPECT_NEAR(both.removed.at("q"), 0.24, 1e-12);
+  EXPECT_NEAR(both.removed.at("N"), 3, 1e-12);
+  EXPECT_TRUE(std::isnan(HeldOutShareOfExcessRemoved(both, held_out_before, held_out_after,
+                                                     held_out_tests, {"q", "N"})));
+  // All of the gain in q: judged, and the held-out q removes less than nothing.
+  const ExcessShare q_only =
+      ShareOfExcessRemoved(estimation_before, estimation_after, estimation_tests, {"q"});
+  const double judged =
+      HeldOutShareOfExcessRemoved(q_only, held_out_before, held_out_after, held_out_tests, {"q"});
+  EXPECT_NEAR(judged,
+              ShareOfExcessRemoved(held_out_before, held_out_after, held_out_tests, {"q"}).share,
+              1e-12);
+  EXPECT_LT(judged, 0);
+  // A change that removed nothing anywhere is judged (no gain to place).
+  const ExcessShare nothing = ShareOfExcessRemoved(estimation_before, estimation_before,
+                                                   estimation_tests, {"q", "N"});
+  EXPECT_FALSE(std::isnan(HeldOutShareOfExcessRemoved(nothing, held_out_before, held_out_after,
+                                                      held_out_tests, {"q", "N"})));
+}
+
 }  // namespace
 }  // namespace coaxid
