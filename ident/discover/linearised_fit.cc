@@ -482,9 +482,10 @@ ColumnTest ColumnTester::Test(const std::vector<int>& tested, const Eigen::Vecto
   // A column is separable when S(c, c) stands kPrecision times above that
   // rounding floor, and the group when the smallest eigenvalue of S, scaled
   // to unit diagonal of N_ZZ, stands above the largest of the columns'
-  // floors so scaled. Below it the step and the predicted drop are noise
-  // (measured: a wind column nearly collinear on a low flight gave
-  // wd = -71 m/s and a predicted drop 20 times the RSS). A fixed floor of
+  // floors so scaled. Below it the step and the predicted drop are noise;
+  // what passes it and is still absurd, the guard on the drop below catches
+  // (a wind column nearly collinear on a low flight once gave wd = -71 m/s
+  // and a predicted drop 20 times the RSS; not replayed). A fixed floor of
   // 1e-6 of N_ZZ(c, c), used before, also refused columns that a balance log
   // separates beside a flight log: wake_interference's weaker column kept a
   // squared sine of 3.5e-7 on seed 12962, where every candidate column's
