@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/errors.h"
 #include "core/report_values.h"
 #include "ident/discover/practical_significance.h"
 
@@ -67,7 +68,13 @@ PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& no
                                 NumberText(first.wald_p_value, "%.3g") + ")") +
              ": refitting the round with it in the model, for an effect beside it");
   ModelSnapshot at_first = with_first.snapshot;
-  AddValidation(validation, o, &at_first);
+  try {
+    AddValidation(validation, o, &at_first);
+  } catch (const ComputationError& e) {
+    pair.why_not = std::string("the model with it fails on the held-out data: ") + e.what();
+    Say(o, "discover: nothing added beside " + first.effect + ": " + pair.why_not);
+    return pair;
+  }
   pair.beside = ScoreRound(with_first.next, at_first, estimation, o, round_number);
   for (CandidateScore& s : pair.beside) s.beside = first.effect;
   std::vector<std::string> not_beside = excluded;

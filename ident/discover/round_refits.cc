@@ -10,6 +10,7 @@
 #include <memory>
 #include <thread>
 
+#include "core/errors.h"
 #include "core/report_values.h"
 #include "core/stopwatch.h"
 #include "ident/discover/practical_significance.h"
@@ -171,7 +172,12 @@ std::vector<CandidateRefit> RefitInRankOrder(
     // 50 iterations), and it decides only a candidate that passes every gate
     // on the estimation data.
     if (!validation.empty() && WhyNotConfirmed(s, level, o).empty()) {
-      AddValidation(validation, quiet, &refits[k].snapshot);
+      try {
+        AddValidation(validation, quiet, &refits[k].snapshot);
+      } catch (const ComputationError& e) {
+        s.why_not_confirmed = std::string("its model fails on the held-out data: ") + e.what();
+        return;
+      }
       s.share_of_excess_held_out =
           HeldOutShareOfExcessRemoved(est, now.validation, refits[k].snapshot.validation,
                                       now.validation_residual_tests, s.channels);
