@@ -4,9 +4,11 @@
 // them the way a user would.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -77,6 +79,13 @@ class DiscoverOnADraw : public CliTestDir {
       return nullptr;
     }
     return Discover(spec, *draw);
+  }
+
+  // The effects a discovery.json added, sorted.
+  static std::vector<std::string> SortedAdded(const nlohmann::json& j) {
+    std::vector<std::string> added = j["added"].get<std::vector<std::string>>();
+    std::sort(added.begin(), added.end());
+    return added;
   }
 };
 

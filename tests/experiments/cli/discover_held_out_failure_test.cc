@@ -8,7 +8,6 @@
 // model's held-out prediction cannot be integrated. Before, the whole run
 // failed ("the model cannot be simulated on the held-out data", exit 1);
 // now the CG offset is kept and both effects are found.
-#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -26,9 +25,8 @@ TEST_F(DiscoverHeldOutFailureCli, AModelWithoutAnEffectThatFailsOnTheHeldOutFlig
   RandomDraw draw;
   const nlohmann::json j = DiscoverFlightOnly(13269, "cg_offset+gyroscopic", &draw);
   ASSERT_FALSE(j.is_null());
-  std::vector<std::string> added = j["added"].get<std::vector<std::string>>();
-  std::sort(added.begin(), added.end());
-  EXPECT_EQ(added, (std::vector<std::string>{"cg_offset", "gyroscopic"})) << j["added"].dump();
+  EXPECT_EQ(SortedAdded(j), (std::vector<std::string>{"cg_offset", "gyroscopic"}))
+      << j["added"].dump();
   EXPECT_TRUE(j["removed"].empty()) << j["removed"].dump();
 }
 

@@ -50,9 +50,7 @@ class DiscoverPairCli : public DiscoverOnADraw {
     ASSERT_EQ(draw.truth_label, "cg_offset+stabilizer_bar");
     const nlohmann::json j = Discover(spec, draw, std::to_string(seed) + "_");
     ASSERT_FALSE(j.is_null());
-    std::vector<std::string> added = j["added"].get<std::vector<std::string>>();
-    std::sort(added.begin(), added.end());
-    ASSERT_EQ(added, (std::vector<std::string>{"cg_offset", "stabilizer_bar"}))
+    ASSERT_EQ(SortedAdded(j), (std::vector<std::string>{"cg_offset", "stabilizer_bar"}))
         << j["added"].dump();
     EXPECT_DOUBLE_EQ(j["settings"]["min_share_to_pair"].get<double>(), 0.1);
     EXPECT_TRUE(j["removed"].empty()) << j["removed"].dump();
@@ -99,9 +97,8 @@ TEST_F(DiscoverPairCli, WindThatIsNotSignificantAloneHoldsBackAStandInAndIsAdded
   RandomDraw draw;
   const nlohmann::json j = DiscoverFlightOnly(21253, "ground_effect+wind", &draw);
   ASSERT_FALSE(j.is_null());
-  std::vector<std::string> added = j["added"].get<std::vector<std::string>>();
-  std::sort(added.begin(), added.end());
-  ASSERT_EQ(added, (std::vector<std::string>{"ground_effect", "wind"})) << j["added"].dump();
+  ASSERT_EQ(SortedAdded(j), (std::vector<std::string>{"ground_effect", "wind"}))
+      << j["added"].dump();
   EXPECT_TRUE(j["removed"].empty()) << j["removed"].dump();
   bool paired = false, stand_in_held_back = false;
   for (const nlohmann::json& c : j["candidates"]) {
