@@ -27,7 +27,6 @@
 // more than the one that qualifies (ident/discover/round_choice.h), on seed
 // 21253 of the confusion spec (bench/discover_speed.sh, 2026-12-06): wind
 // beside a ground effect, low flight, flight only.
-#include <algorithm>
 #include <cmath>
 #include <map>
 #include <string>
