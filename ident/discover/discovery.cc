@@ -273,14 +273,11 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
     if (!fit.usable) continue;  // keep it: nothing to judge against
     Vehicle refitted = without;
     refitted.parameters = fit.parameters;
-    ModelSnapshot snapshot;
-    try {
-      snapshot = Snapshot(refitted, fit, estimation, validation, o);
-    } catch (const ComputationError& e) {
-      // Keep it: the model without it is no model of the held-out logs
-      // (seed 13269: the CG offset's, once gyroscopic moments were added).
+    ModelSnapshot snapshot = Snapshot(refitted, fit, estimation, {}, o);
+    const std::string failed = TryAddValidation(validation, o, &snapshot);
+    if (!failed.empty()) {
       Say(o, "  without " + effect + ": kept, the model without it fails on the held-out data (" +
-                 e.what() + ")");
+                 failed + ")");
       continue;
     }
     const std::vector<std::string> channels = ChannelsReachedBy(

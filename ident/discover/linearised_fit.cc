@@ -421,6 +421,7 @@ ColumnTester::ColumnTester(const LinearisedFit& fit, const std::vector<int>& nui
   for (int a = 0; a < n; ++a) {
     for (int c = 0; c < n; ++c) A(a, c) = reduced_normal_(nuisance[a], nuisance[c]);
   }
+  abs_nuisance_normal_ = A.cwiseAbs();
   // Jacobi scaling by each column's own size makes the rank threshold count
   // what the states leave of it.
   inverse_scale_.resize(n);
@@ -496,17 +497,11 @@ ColumnTest ColumnTester::Test(const std::vector<int>& tested, const Eigen::Vecto
   const char* kNotSeparable =
       "its regressors are explained by the parameters already estimated (not separable in "
       "these logs)";
-  Eigen::MatrixXd abs_N00(n, n);
-  for (int a = 0; a < n; ++a) {
-    for (int c = 0; c < n; ++c) {
-      abs_N00(a, c) = std::abs(reduced_normal_(nuisance_[a], nuisance_[c]));
-    }
-  }
   double group_floor = 0;  // relative to N_ZZ's diagonal
   for (int c = 0; c < q; ++c) {
     const Eigen::VectorXd x = X.col(c).cwiseAbs();
     const double cancelling = NZZ(c, c) + state_cancellation_(tested[c]) +
-                              N0Z.col(c).cwiseAbs().dot(x) + x.dot(abs_N00 * x);
+                              N0Z.col(c).cwiseAbs().dot(x) + x.dot(abs_nuisance_normal_ * x);
     const double floor = kPrecision * std::numeric_limits<double>::epsilon() * cancelling;
     if (!(NZZ(c, c) > 0) || !(S(c, c) > floor)) {
       t.why_not = kNotSeparable;

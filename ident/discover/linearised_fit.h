@@ -156,8 +156,10 @@ class ColumnTester {
   //   N~ = N_tt - N_ts N_ss^-1 N_st,   b~_c = b_c[theta] - N_ts N_ss^-1 b_c[s].
   Eigen::MatrixXd reduced_normal_;
   Eigen::MatrixXd reduced_scores_;  // b~_c, one column per cluster
-  // |N_ts|^T |N_ss^-1 N_st| per parameter: what cancels in N~'s diagonal.
+  // |N_ts|^T |N_ss^-1 N_st| per parameter, and |N~_00|: what cancels in S
+  // (ColumnTester::Test's separation floor).
   Eigen::VectorXd state_cancellation_;
+  Eigen::MatrixXd abs_nuisance_normal_;
   // N~_00^+ = D^-1 V diag(1 / lambda) V^T D^-1, D^2 the diagonal of the
   // nuisance parameters' own N (so the rank threshold counts what the states
   // leave of each column).

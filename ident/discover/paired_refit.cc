@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/errors.h"
 #include "core/report_values.h"
 #include "ident/discover/practical_significance.h"
 
@@ -68,10 +67,9 @@ PairedRefit RefitBesideABound(const CandidatePass& pass, const ModelSnapshot& no
                                 NumberText(first.wald_p_value, "%.3g") + ")") +
              ": refitting the round with it in the model, for an effect beside it");
   ModelSnapshot at_first = with_first.snapshot;
-  try {
-    AddValidation(validation, o, &at_first);
-  } catch (const ComputationError& e) {
-    pair.why_not = std::string("the model with it fails on the held-out data: ") + e.what();
+  const std::string failed = TryAddValidation(validation, o, &at_first);
+  if (!failed.empty()) {
+    pair.why_not = "the model with it fails on the held-out data: " + failed;
     Say(o, "discover: nothing added beside " + first.effect + ": " + pair.why_not);
     return pair;
   }

@@ -57,6 +57,16 @@ void AddValidation(const std::vector<EstimationLog>& validation, const Discovery
   s->validation_residual_tests = AnalyseResiduals(validation, s->validation_predictions, o.residuals);
 }
 
+std::string TryAddValidation(const std::vector<EstimationLog>& validation,
+                             const DiscoveryOptions& o, ModelSnapshot* s) {
+  try {
+    AddValidation(validation, o, s);
+  } catch (const ComputationError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 ModelSnapshot Snapshot(const Vehicle& vehicle, const OutputErrorResult& r,
                        const std::vector<EstimationLog>& estimation,
                        const std::vector<EstimationLog>& validation, const DiscoveryOptions& o) {
@@ -172,10 +182,9 @@ std::vector<CandidateRefit> RefitInRankOrder(
     // 50 iterations), and it decides only a candidate that passes every gate
     // on the estimation data.
     if (!validation.empty() && WhyNotConfirmed(s, level, o).empty()) {
-      try {
-        AddValidation(validation, quiet, &refits[k].snapshot);
-      } catch (const ComputationError& e) {
-        s.why_not_confirmed = std::string("its model fails on the held-out data: ") + e.what();
+      const std::string failed = TryAddValidation(validation, quiet, &refits[k].snapshot);
+      if (!failed.empty()) {
+        s.why_not_confirmed = "its model fails on the held-out data: " + failed;
         return;
       }
       s.share_of_excess_held_out =

@@ -39,6 +39,15 @@ int SideBySideWorkers(int n, const OutputErrorOptions& fit, OutputErrorOptions* 
 void AddValidation(const std::vector<EstimationLog>& validation, const DiscoveryOptions& o,
                    ModelSnapshot* s);
 
+// The same for a model the loop only tries (a candidate's refit, the model
+// without an added effect, the model at a first effect's bound): why it
+// cannot be simulated on the held-out logs (empty: it can, and *s has its
+// held-out side). That is the tried model's failure, not the run's (seed
+// 13269 of the confusion study: the model without its CG offset, once
+// gyroscopic moments were added, ended the run).
+std::string TryAddValidation(const std::vector<EstimationLog>& validation,
+                             const DiscoveryOptions& o, ModelSnapshot* s);
+
 // A fitted model and how well it fits the estimation (and held-out) logs.
 ModelSnapshot Snapshot(const Vehicle& vehicle, const OutputErrorResult& r,
                        const std::vector<EstimationLog>& estimation,

@@ -333,7 +333,9 @@ TEST(DiscoverFlight, WakeInterferenceIsFoundBesideAFlightLog) {
     ExpectWithinThreeStd(run.result, run.truth, "wake_interference.k_T");
     ExpectWithinThreeStd(run.result, run.truth, "wake_interference.k_Q");
     for (const CandidateScore& s : run.result.candidates) {
-      if (s.confirmed) EXPECT_TRUE(std::isnan(s.share_of_excess_held_out)) << s.effect;
+      if (s.confirmed) {
+        EXPECT_TRUE(std::isnan(s.share_of_excess_held_out)) << s.effect;
+      }
     }
   }
 }
