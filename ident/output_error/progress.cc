@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <utility>
 
 #include "core/stopwatch.h"
@@ -40,11 +41,22 @@ ceres::CallbackReturnType OutputErrorProgress::operator()(const ceres::Iteration
   if (s.iteration > 0 && s.step_is_successful) previous_drop_ = drop;
   if (!print_) return ceres::SOLVER_CONTINUE;
   char line[320];
+  // A trial point the model could not be evaluated at (an integration that
+  // failed, a non-finite state): Ceres reports its cost as the largest
+  // double, and its ratio as -1.8e308, which %.2f would print in 300 digits.
+  const bool evaluated = s.cost < std::numeric_limits<double>::max();
+  char cost[64];
+  if (evaluated) {
+    std::snprintf(cost, sizeof cost, "cost %.6e", s.cost);
+  } else {
+    std::snprintf(cost, sizeof cost, "the model failed at the trial point");
+  }
   int n = std::snprintf(line, sizeof line,
-                        "%s: iteration %2d  cost %.6e  |step| %.2e  tr_radius %.1e  tr_ratio %.2f  "
+                        "%s: iteration %2d  %s  |step| %.2e  tr_radius %.1e  tr_ratio %.2f  "
                         "elapsed %.1f s  (%.1f s, %.0f rows/s)",
-                        stage_.c_str(), s.iteration, s.cost, s.step_norm, s.trust_region_radius,
-                        s.relative_decrease, SecondsSince(start_), s.iteration_time_in_seconds,
+                        stage_.c_str(), s.iteration, cost, s.step_norm, s.trust_region_radius,
+                        evaluated ? s.relative_decrease : -INFINITY, SecondsSince(start_),
+                        s.iteration_time_in_seconds,
                         rows_ / std::max(s.iteration_time_in_seconds, 1e-9));
   if (left > 0 && n > 0 && n < static_cast<int>(sizeof line)) {
     std::snprintf(line + n, sizeof line - n,

@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace coaxid {
@@ -47,6 +48,28 @@ TEST(OutputErrorProgress, PrintsTheTrustRegionBesideTheCost) {
             std::string::npos)
       << line;
   EXPECT_NE(line.find("tr_radius 6.4e+04  tr_ratio 0.39"), std::string::npos) << line;
+}
+
+// Ceres reports a trial point the model failed at with the largest double as
+// its cost and -1.8e308 as its ratio: printed as numbers the line ran past
+// its buffer and lost the elapsed time.
+TEST(OutputErrorProgress, SaysWhenTheModelFailedAtTheTrialPoint) {
+  std::string line;
+  OutputErrorProgress progress([&line](const std::string& l) { line = l; }, "stage 2/2",
+                               std::chrono::steady_clock::now(), 12000, 1e-6);
+  ceres::IterationSummary s;
+  s.iteration = 4;
+  s.cost = std::numeric_limits<double>::max();
+  s.step_norm = 12.9;
+  s.trust_region_radius = 3.9;
+  s.relative_decrease = -std::numeric_limits<double>::max();
+  s.step_is_successful = false;
+  EXPECT_EQ(progress(s), ceres::SOLVER_CONTINUE);
+  EXPECT_NE(line.find("iteration  4  the model failed at the trial point  |step| 1.29e+01"),
+            std::string::npos)
+      << line;
+  EXPECT_NE(line.find("tr_ratio -inf  elapsed "), std::string::npos) << line;
+  EXPECT_LT(line.size(), 200u) << line;
 }
 
 }  // namespace
