@@ -62,6 +62,13 @@ struct IntegratorOptions {
   // interval (four right-hand sides) instead of the integrator's adaptive steps, except on an
   // interval that step finds too stiff, which the integrator takes (Simulator::Run).
   bool one_rk4_step_per_hold = false;
+  // With one_rk4_step_per_hold: an interval too stiff for that step (its
+  // stages read h |lambda| > 2, a mode faster than the holds can follow)
+  // fails the run instead of going to the integrator. For fits whose
+  // model's physical modes are all slow against the holds: a point with such
+  // a mode is outside the model's physical range, refused as a non-finite
+  // state is (OutputErrorOptions::DefaultIntegrator).
+  bool stiff_holds_fail = false;
 
   bool IsValid(std::string* why) const;
 };

@@ -133,7 +133,8 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
     }
     if (!ok) {
       error_ = "integration failed between t = " + std::to_string(inputs.time(k)) + " and " +
-               std::to_string(inputs.time(k + 1)) + " s: " + integrator_->last_error();
+               std::to_string(inputs.time(k + 1)) +
+               " s: " + (step_error_.empty() ? integrator_->last_error() : step_error_);
       return false;
     }
     if (!x.allFinite()) {
@@ -150,7 +151,17 @@ bool Simulator::Run(const InputHold& inputs, int first, int last, const Eigen::V
 }
 
 bool Simulator::StepState(double t0, double t1, Eigen::VectorXd* x) {
-  if (options_.one_rk4_step_per_hold && RungeKuttaStateStep(t0, t1, x)) return true;
+  step_error_.clear();
+  if (options_.one_rk4_step_per_hold) {
+    if (RungeKuttaStateStep(t0, t1, x)) return true;
+    if (options_.stiff_holds_fail) {
+      // kMaxRungeKuttaStiffness, 2.
+      step_error_ =
+          "the RK4 step a hold failed or found a mode faster than the holds can follow "
+          "(h |lambda| > 2): refused (IntegratorOptions::stiff_holds_fail)";
+      return false;
+    }
+  }
   return integrator_->Reset(t0, *x) && integrator_->AdvanceTo(t1, x);
 }
 

@@ -117,9 +117,12 @@ class Simulator {
     Eigen::MatrixXd A0, Am, A1, B0, Bm, B1, K1, K2, K3, K4, Stage;
   } rk_;
   // The state over one hold interval [t0, t1] from *x: one classic RK4 step
-  // with options_.one_rk4_step_per_hold (the integrator where that step is
-  // too stiff or fails), else the integrator.
+  // with options_.one_rk4_step_per_hold (where that step is too stiff or
+  // fails, the integrator, or with options_.stiff_holds_fail a failure),
+  // else the integrator.
   bool StepState(double t0, double t1, Eigen::VectorXd* x);
+  // Why StepState refused its interval (stiff_holds_fail); empty otherwise.
+  std::string step_error_;
   // One classic RK4 step of the state; false (x untouched) where the step
   // fails or its stages say h |lambda| > kMaxRungeKuttaStiffness.
   bool RungeKuttaStateStep(double t0, double t1, Eigen::VectorXd* x);

@@ -153,6 +153,17 @@ struct OutputErrorOptions {
     // the largest 26.4 -> 18.8 s, the same added effects on every log
     // (docs/discover_confusion.md, twenty-seventh session).
     o.one_rk4_step_per_hold = true;
+    // An interval too stiff for that step is refused, not integrated: the
+    // model's modes inside the library's bounds are slow against the holds
+    // (the stabilizer bar's fastest, T_b = 0.05 s, 20 / s; the lags act on
+    // the held inputs, not as states), so a trial point with a mode beyond
+    // 2 / h (200 / s on the 100 Hz rows discover fits) is outside the
+    // physical range, where the integrator ground through up to 50 steps a
+    // hold. Measured (docs/discover_confusion.md, thirty-fourth session):
+    // 12 % of a discover run's holds on confusion seed 21898 went to the
+    // integrator; refused, 20.7 -> 10.0 s, 21668 31.9 -> 17.1 s, the same
+    // effects added.
+    o.stiff_holds_fail = true;
     return o;
   }
   static IntegratorOptions CoarseIntegrator() {

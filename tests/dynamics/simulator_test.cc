@@ -380,6 +380,38 @@ TEST(Simulator, StiffIntervalsLeaveTheRungeKuttaStepOfTheState) {
   EXPECT_LT(WorstRk4StateError(f, theta), 5e-4);
 }
 
+// With stiff_holds_fail (the output-error fits') the stiff bar's intervals
+// fail the run, with a message that says where and why, instead of going to
+// the integrator; where no interval is stiff (the fixture's vehicle) the run
+// is bit for bit the one without the option.
+TEST(Simulator, StiffHoldsFailTheRunWhenAskedTo) {
+  const Fixture f = MakeFixture();
+  IntegratorOptions options;
+  options.method = IntegratorOptions::Method::kExplicitRungeKutta;
+  options.one_rk4_step_per_hold = true;
+  IntegratorOptions refusing = options;
+  refusing.stiff_holds_fail = true;
+  Trajectory a, b;
+  Simulator integrating(f.vehicle.model, f.vehicle.parameters.Values(), options);
+  Simulator refused(f.vehicle.model, f.vehicle.parameters.Values(), refusing);
+  ASSERT_TRUE(integrating.Run(f.inputs, 100, 300, f.x0, &a)) << integrating.last_error();
+  ASSERT_TRUE(refused.Run(f.inputs, 100, 300, f.x0, &b)) << refused.last_error();
+  for (size_t k = 0; k < a.states.size(); ++k) EXPECT_EQ(a.states[k], b.states[k]) << k;
+
+  Eigen::VectorXd stiff = f.vehicle.parameters.Values();
+  stiff[f.vehicle.parameters.IndexOrThrow("stabilizer_bar.T_b")] = 1e-3;
+  Simulator stiff_integrating(f.vehicle.model, stiff, options);
+  Simulator stiff_refused(f.vehicle.model, stiff, refusing);
+  EXPECT_TRUE(stiff_integrating.Run(f.inputs, 100, 300, f.x0, &a))
+      << stiff_integrating.last_error();
+  EXPECT_FALSE(stiff_refused.Run(f.inputs, 100, 300, f.x0, &b));
+  EXPECT_NE(stiff_refused.last_error().find("integration failed between t = "), std::string::npos)
+      << stiff_refused.last_error();
+  EXPECT_NE(stiff_refused.last_error().find("a mode faster than the holds can follow"),
+            std::string::npos)
+      << stiff_refused.last_error();
+}
+
 // Sensitivities along the states of a run without them (the output-error
 // fit's trial point, accepted) are bit for bit those of a run that
 // integrates the states itself: at the nominal vehicle, where those states

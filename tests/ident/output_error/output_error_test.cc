@@ -59,13 +59,13 @@ OutputErrorOptions FastOptions() {
   return o;
 }
 
-// The segments' integrator caps the steps of one 5 ms hold
-// (OutputErrorOptions::DefaultIntegrator): a mode 50 times faster than the
-// fastest the bounds allow (the stabilizer bar's T_b at 1 ms, its lower
-// bound 0.05 s) still integrates, its sensitivities through the
-// variational equations (h ||A|| > 2); a non-physical one (T_b = 10 us, as
-// a restart's wild trial point can make) fails the run at once instead of
-// grinding through a hundred or more steps a hold, though ten times the cap
+// The segments' integrator (OutputErrorOptions::DefaultIntegrator) takes the
+// fastest mode the bounds allow (the stabilizer bar's T_b at its lower bound,
+// 0.05 s) by one RK4 step a 5 ms hold, and refuses a mode too fast for that
+// step (stiff_holds_fail): T_b at 1 ms (50 times faster than the bound) and
+// at 10 us (as a restart's wild trial point can make) fail the run at once.
+// Without the refusal the integrator takes the stiff intervals, up to its cap
+// of 50 steps a hold: 1 ms integrates, 10 us fails, though ten times the cap
 // would integrate it (measured, seed 20468 of bench/discover_speed.sh: 332 s
 // of restarts at 500 steps, 33 s at 50, the same answer).
 TEST(OutputError, TheSegmentIntegratorTakesStiffModesAndRefusesNonPhysicalOnes) {
@@ -83,25 +83,34 @@ TEST(OutputError, TheSegmentIntegratorTakesStiffModesAndRefusesNonPhysicalOnes) 
   std::vector<int> all(vehicle.parameters.size());
   for (int i = 0; i < vehicle.parameters.size(); ++i) all[i] = i;
   const int t_b = vehicle.parameters.IndexOrThrow("stabilizer_bar.T_b");
-  IntegratorOptions ten_times = OutputErrorOptions::DefaultIntegrator();
+  ASSERT_EQ(vehicle.parameters[t_b].lower, 0.05);
+  const IntegratorOptions fits = OutputErrorOptions::DefaultIntegrator();
+  ASSERT_TRUE(fits.stiff_holds_fail);
+  IntegratorOptions integrating = fits;
+  integrating.stiff_holds_fail = false;
+  IntegratorOptions ten_times = integrating;
   ten_times.max_steps_per_interval *= 10;
-  for (const double time_constant : {1e-3, 1e-5}) {
+  struct Case {
+    double time_constant;
+    const IntegratorOptions* options;
+    bool runs;
+  };
+  const std::vector<Case> cases = {{0.05, &fits, true},        {1e-3, &fits, false},
+                                   {1e-5, &fits, false},       {1e-3, &integrating, true},
+                                   {1e-5, &integrating, false}, {1e-5, &ten_times, true}};
+  for (const Case& c : cases) {
     Eigen::VectorXd theta = vehicle.parameters.Values();
-    theta[t_b] = time_constant;
-    const bool physical = time_constant == 1e-3;
-    for (const IntegratorOptions& options : {OutputErrorOptions::DefaultIntegrator(), ten_times}) {
-      const bool capped = options.max_steps_per_interval != ten_times.max_steps_per_interval;
-      Simulator plain(vehicle.model, theta, options);
-      Simulator sensitive(vehicle.model, theta, options, {true, true}, all,
-                          SensitivityMethod::kRungeKuttaPerHold);
-      Trajectory a, b;
-      EXPECT_EQ(plain.Run(log.inputs, 20, 220, x0, &a), physical || !capped)
-          << "T_b " << time_constant << ", cap " << options.max_steps_per_interval << ": "
-          << plain.last_error();
-      EXPECT_EQ(sensitive.Run(log.inputs, 20, 220, x0, &b), physical || !capped)
-          << "T_b " << time_constant << ", cap " << options.max_steps_per_interval << ": "
-          << sensitive.last_error();
-    }
+    theta[t_b] = c.time_constant;
+    Simulator plain(vehicle.model, theta, *c.options);
+    Simulator sensitive(vehicle.model, theta, *c.options, {true, true}, all,
+                        SensitivityMethod::kRungeKuttaPerHold);
+    Trajectory a, b;
+    const std::string what = "T_b " + std::to_string(c.time_constant) + ", stiff holds fail " +
+                             std::to_string(c.options->stiff_holds_fail) + ", cap " +
+                             std::to_string(c.options->max_steps_per_interval) + ": ";
+    EXPECT_EQ(plain.Run(log.inputs, 20, 220, x0, &a), c.runs) << what << plain.last_error();
+    EXPECT_EQ(sensitive.Run(log.inputs, 20, 220, x0, &b), c.runs) << what
+                                                                   << sensitive.last_error();
   }
 }
 
