@@ -157,8 +157,8 @@ bool Simulator::StepState(double t0, double t1, Eigen::VectorXd* x) {
     if (options_.stiff_holds_fail) {
       // kMaxRungeKuttaStiffness, 2.
       step_error_ =
-          "the RK4 step a hold failed or found a mode faster than the holds can follow "
-          "(h |lambda| > 2): refused (IntegratorOptions::stiff_holds_fail)";
+          "one RK4 step over the hold failed or found a mode faster than the holds can follow "
+          "(h |lambda| > 2), outside the physical range a fit accepts";
       return false;
     }
   }

@@ -97,6 +97,9 @@ const Trajectory* FlightSegmentCost::Simulate(const double* start_state,
   if (!ok) {
     VLOG(1) << "segment rows " << first_ << ".." << last_
             << (sensitivities ? " (with sensitivities)" : "") << ": " << simulator.last_error();
+    last_failure_ = simulator.last_error();
+  } else {
+    last_failure_.clear();
   }
   if (times_) {
     const long ns =

@@ -36,6 +36,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <vector>
 
 #include <ceres/ceres.h>
@@ -92,6 +93,9 @@ class FlightSegmentCost : public ceres::CostFunction {
   int first() const { return first_; }
   int last() const { return last_; }
   bool has_next() const { return has_next_; }
+  // Why the segment's last simulation failed (the simulator's message);
+  // empty if it did not.
+  const std::string& last_failure() const { return last_failure_; }
   int NumOutputResiduals() const { return static_cast<int>(terms_.size()); }
 
   // Output residual r of Evaluate is terms()[r]; the continuity residuals
@@ -142,6 +146,7 @@ class FlightSegmentCost : public ceres::CostFunction {
   // different blocks in parallel but never one block twice at once.
   std::shared_ptr<const SegmentSimulators> simulators_;
   mutable CachedRun plain_run_;
+  mutable std::string last_failure_;
   SegmentCostTimes* times_ = nullptr;
 };
 

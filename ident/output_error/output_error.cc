@@ -252,6 +252,26 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
 }
 
 // Predictions of the assembled problem at its current parameter values.
+// Where the model cannot be simulated at theta_scaled (a solve that failed
+// at its start: Ceres says only that an evaluation failed): the first flight
+// segment whose simulation fails, as "; the model fails on LOG: " and the
+// simulator's reason, which gives the time; empty if none does.
+std::string WhereTheModelFails(const std::vector<EstimationLog>& logs, const Assembly& a,
+                               const double* theta_scaled) {
+  for (size_t i = 0; i < logs.size() && i < a.segment_costs.size(); ++i) {
+    for (size_t j = 0; j < a.segment_costs[i].size(); ++j) {
+      const FlightSegmentCost* cost = a.segment_costs[i][j];
+      std::vector<Eigen::VectorXd> outputs;
+      Eigen::VectorXd end_state;
+      if (cost->Predict(a.segments[i].states[j].data(), theta_scaled, &outputs, &end_state)) {
+        continue;
+      }
+      return "; the model fails on " + logs[i].source + ": " + cost->last_failure();
+    }
+  }
+  return "";
+}
+
 bool Predict(const Vehicle& vehicle, const FreeParameters& free,
              const std::vector<EstimationLog>& logs, const Assembly& a, const double* theta_scaled,
              std::vector<Eigen::MatrixXd>* predictions) {
@@ -583,7 +603,10 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
     if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() ||
         !theta_scaled.allFinite()) {
       result.usable = false;
-      result.why_not_usable = std::string(stage_name) + ": the solver failed: " + summary.message;
+      std::string message = summary.message;
+      if (!message.empty() && message.back() == '.') message.pop_back();
+      result.why_not_usable = std::string(stage_name) + ": the solver failed: " + message +
+                              WhereTheModelFails(logs, a, theta_scaled.data());
       return result;
     }
     if (!Predict(vehicle, solve_free, logs, a, theta_scaled.data(), &previous_predictions)) {

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -162,6 +163,33 @@ TEST_F(IdentifyCliTest, BadInputExitsTwoAndWritesNothing) {
     EXPECT_TRUE(Contains(r.output, c.message)) << c.message << " in\n" << r.output;
     EXPECT_FALSE(fs::exists(out)) << c.args;
   }
+}
+
+// A config whose start the model cannot be simulated at (the stabilizer
+// bar's T_b at 0.1 ms, its lower bound moved to 10 us: a mode far faster
+// than the 5 ms holds, which the fits refuse): exit 1 with one message that
+// says where the model fails and why, not Ceres' own log line, and nothing
+// written.
+TEST_F(IdentifyCliTest, AStartTheModelCannotBeSimulatedAtSaysWhereAndWhy) {
+  std::ifstream in(std::string(COAXID_SOURCE_DIR) + "/configs/glmav.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string no_effects = "effects: {}";
+  const size_t at = text.find(no_effects);
+  ASSERT_NE(at, std::string::npos) << "configs/glmav.yaml no longer says " << no_effects;
+  text.replace(at, no_effects.size(),
+               "effects:\n  stabilizer_bar:\n    T_b: {value: 1.0e-4, lower: 1.0e-5}");
+  const std::string config = Path("stiff.yaml");
+  std::ofstream(config) << text;
+  const std::string out = Path("out");
+  const std::string flight = std::string(COAXID_SOURCE_DIR) + "/data/glmav/flight.csv";
+  const RunResult r = RunCoaxid("identify --method=output_error --start=config --logs=" + flight +
+                                " --config=" + config + " --out=" + out);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_TRUE(Contains(r.output, "the model fails on " + flight)) << r.output;
+  EXPECT_TRUE(Contains(r.output, "integration failed between t = 0.000000")) << r.output;
+  EXPECT_TRUE(Contains(r.output, "a mode faster than the holds can follow")) << r.output;
+  EXPECT_FALSE(Contains(r.output, "trust_region_minimizer")) << r.output;
+  EXPECT_FALSE(fs::exists(out));
 }
 
 // `identify --method=output_error --coloured_residuals`: report.json says
