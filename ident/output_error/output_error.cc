@@ -252,29 +252,12 @@ Assembly Assemble(const Vehicle& vehicle, const FreeParameters& free,
 }
 
 // Predictions of the assembled problem at its current parameter values.
-// Where the model cannot be simulated at theta_scaled (a solve that failed
-// at its start: Ceres says only that an evaluation failed): the first flight
-// segment whose simulation fails, as "; the model fails on LOG: " and the
-// simulator's reason, which gives the time; empty if none does.
-std::string WhereTheModelFails(const std::vector<EstimationLog>& logs, const Assembly& a,
-                               const double* theta_scaled) {
-  for (size_t i = 0; i < logs.size() && i < a.segment_costs.size(); ++i) {
-    for (size_t j = 0; j < a.segment_costs[i].size(); ++j) {
-      const FlightSegmentCost* cost = a.segment_costs[i][j];
-      std::vector<Eigen::VectorXd> outputs;
-      Eigen::VectorXd end_state;
-      if (cost->Predict(a.segments[i].states[j].data(), theta_scaled, &outputs, &end_state)) {
-        continue;
-      }
-      return "; the model fails on " + logs[i].source + ": " + cost->last_failure();
-    }
-  }
-  return "";
-}
-
+// false where a flight segment cannot be simulated there; *why_not (if
+// given) then names the log and the simulator's reason, with the time
+// (Ceres says only that an evaluation failed).
 bool Predict(const Vehicle& vehicle, const FreeParameters& free,
              const std::vector<EstimationLog>& logs, const Assembly& a, const double* theta_scaled,
-             std::vector<Eigen::MatrixXd>* predictions) {
+             std::vector<Eigen::MatrixXd>* predictions, std::string* why_not = nullptr) {
   predictions->clear();
   const Eigen::VectorXd theta = free.Theta(theta_scaled);
   for (size_t i = 0; i < logs.size(); ++i) {
@@ -292,6 +275,7 @@ bool Predict(const Vehicle& vehicle, const FreeParameters& free,
         std::vector<Eigen::VectorXd> outputs;
         Eigen::VectorXd end_state;
         if (!cost->Predict(a.segments[i].states[j].data(), theta_scaled, &outputs, &end_state)) {
+          if (why_not) *why_not = log.source + ": " + cost->last_failure();
           return false;
         }
         for (size_t r = 0; r < outputs.size(); ++r) {
@@ -605,14 +589,21 @@ OutputErrorResult FitOutputError(const Vehicle& declared, const std::vector<Esti
       result.usable = false;
       std::string message = summary.message;
       if (!message.empty() && message.back() == '.') message.pop_back();
-      result.why_not_usable = std::string(stage_name) + ": the solver failed: " + message +
-                              WhereTheModelFails(logs, a, theta_scaled.data());
+      result.why_not_usable = std::string(stage_name) + ": the solver failed: " + message;
+      // A solve that failed at its start: where the model fails there.
+      std::string where;
+      std::vector<Eigen::MatrixXd> there;
+      if (!Predict(vehicle, solve_free, logs, a, theta_scaled.data(), &there, &where)) {
+        result.why_not_usable += "; the model fails on " + where;
+      }
       return result;
     }
-    if (!Predict(vehicle, solve_free, logs, a, theta_scaled.data(), &previous_predictions)) {
+    std::string where;
+    if (!Predict(vehicle, solve_free, logs, a, theta_scaled.data(), &previous_predictions,
+                 &where)) {
       result.usable = false;
-      result.why_not_usable = std::string(stage_name) +
-                              ": the model cannot be simulated at the solution (CVODE failed)";
+      result.why_not_usable =
+          std::string(stage_name) + ": the model cannot be simulated at the solution: " + where;
       return result;
     }
     previous = std::move(a);
@@ -824,8 +815,9 @@ std::vector<Eigen::MatrixXd> PredictWithFixedParameters(const Vehicle& vehicle,
       ceres::Solve(so, a.problem.get(), &summary);
     }
     std::vector<Eigen::MatrixXd> p;
-    if (!Predict(vehicle, free, one, a, theta_scaled.data(), &p)) {
-      throw ComputationError(log.source + ": the model cannot be simulated on the held-out data");
+    std::string where;
+    if (!Predict(vehicle, free, one, a, theta_scaled.data(), &p, &where)) {
+      throw ComputationError("the model cannot be simulated on the held-out data: " + where);
     }
     predictions.push_back(p[0]);
   }
