@@ -609,10 +609,6 @@ std::string StartText(const std::map<std::string, double>& restarts, bool from_s
                           : "absence, " + RestartedNames(restarts) + " at the config values";
 }
 
-std::string StepAndRestartText(const std::map<std::string, double>& restarts) {
-  return "its linearised step, " + RestartedNames(restarts) + " at the config values";
-}
-
 }  // namespace
 
 bool OwnParameterAtBound(const std::string& effect, const ParameterSet& parameters) {
@@ -622,22 +618,6 @@ bool OwnParameterAtBound(const std::string& effect, const ParameterSet& paramete
   }
   return false;
 }
-
-namespace {
-
-// A parameter of `effect` pressed to a bound other than its absent value (0).
-bool OwnParameterAtALimit(const std::string& effect, const ParameterSet& parameters) {
-  const std::vector<std::string> names = EffectParameterNames(effect);
-  for (const std::string& name : ParametersAtBounds(parameters)) {
-    if (std::find(names.begin(), names.end(), name) != names.end() &&
-        parameters.Value(name) != 0) {
-      return true;
-    }
-  }
-  return false;
-}
-
-}  // namespace
 
 ColumnTest EffectWaldTest(const CandidatePass& at_refit, const std::string& effect,
                           std::string* why_not) {
@@ -750,31 +730,12 @@ bool RefitCandidate(const CandidatePass& pass, const std::vector<EstimationLog>&
     }
     score->refit_starts.push_back(s3);
   }
-  // The effect still pressed to a limit of its own (a bound other than its
-  // absent value, 0) beside declared parameters at theirs, from either
-  // start: once more from its linearised step with those parameters
-  // restarted at their config values, both at once, kept if it ends lower
-  // and inside the effect's bounds (measured, confusion study seed 21453, a
-  // stabilizer bar alone, hover: from the step at the fit, Ixx and Iyy at
-  // their upper bound, T_b ran to 10 s, cost 15276; from absence at the
-  // config values the refit ended above the fit, 25372; from both, T_b 1.755
-  // s against the truth's 1.739, cost 9182).
-  const std::map<std::string, double>& at_bounds =
-      restarts ? score->restart_values : declared_at_bounds;
-  if (refit->usable && !at_bounds.empty() && !score->linearised_estimates.empty() &&
-      OwnParameterAtALimit(score->effect, refit->parameters)) {
-    OutputErrorResult both = WarmRefit(CandidateStart(pass, *score, at_bounds, true), logs,
-                                       fit_options, pass.fitted, pass.fit, true);
-    RefitStart s4 = start_of(both, StepAndRestartText(at_bounds));
-    double lowest = INFINITY;
-    for (const RefitStart& r : score->refit_starts) lowest = std::min(lowest, r.cost);
-    s4.kept = s4.cost < lowest && !OwnParameterAtBound(score->effect, both.parameters);
-    if (s4.kept) {
-      for (RefitStart& r : score->refit_starts) r.kept = false;
-      *refit = std::move(both);
-    }
-    score->refit_starts.push_back(s4);
-  }
+  // No fourth start from the linearised step with the declared parameters
+  // restarted too: it found seed 21453's stabilizer bar while the fits
+  // integrated stiff trial points, and since they refuse them
+  // (IntegratorOptions::stiff_holds_fail) it was kept in none of 49 refits
+  // (240 judged runs, 112 timed logs) for about 1.4 s each
+  // (docs/discover_confusion.md, thirty-fifth session).
   if (!refit->usable) {
     score->why_not_confirmed = "the joint refit failed: " + refit->why_not_usable;
     return false;

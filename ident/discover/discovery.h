@@ -58,6 +58,12 @@ struct DiscoveryOptions {
   // is a ratio of two small numbers (measured: a cg_offset "removing 830 %"
   // of an excess of almost nothing, 0 % held out).
   double min_channels_excess = 0.1;
+  // A shortlisted candidate whose channels hold less than
+  // min_channels_excess in the current fit is not refitted: no refit of it
+  // could be added, hold back another or start a pair, each of which asks
+  // for that excess. true: it is refitted all the same (the test that
+  // leaving it out changes nothing).
+  bool refit_without_excess = false;
   // A candidate's refit that removes less than this share of its channels'
   // excess at the current fit's noise weights is rejected before its noise
   // re-weighting (RefitCandidate's ReweightingGate). Measured on 135 judged

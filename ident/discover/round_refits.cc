@@ -84,6 +84,16 @@ double WaldLevel(const DiscoveryOptions& o, size_t refitted) {
   return o.alpha / static_cast<double>(std::max<size_t>(1, refitted));
 }
 
+namespace {
+
+std::string WhyNoExcess(double channels_excess, const DiscoveryOptions& o) {
+  return "its channels hold almost no excess error to remove (" +
+         NumberText(channels_excess, "%.3g") + " noise variances, below " +
+         NumberText(o.min_channels_excess, "%.3g") + ")";
+}
+
+}  // namespace
+
 std::string WhyNotSignificant(const CandidateScore& s, double level, const DiscoveryOptions& o) {
   if (!(s.wald_p_value < level)) {
     return "its parameters are not significantly away from absence at the refit (cluster-robust "
@@ -91,11 +101,7 @@ std::string WhyNotSignificant(const CandidateScore& s, double level, const Disco
            NumberText(level, "%.3g") + ")";
   }
   if (!s.plausible) return "not physically meaningful: " + s.why_implausible;
-  if (!(s.channels_excess >= o.min_channels_excess)) {
-    return "its channels hold almost no excess error to remove (" +
-           NumberText(s.channels_excess, "%.3g") + " noise variances, below " +
-           NumberText(o.min_channels_excess, "%.3g") + ")";
-  }
+  if (!(s.channels_excess >= o.min_channels_excess)) return WhyNoExcess(s.channels_excess, o);
   return "";
 }
 
@@ -150,8 +156,24 @@ std::vector<CandidateRefit> RefitInRankOrder(
   quiet.fit.progress = nullptr;
   const double level = WaldLevel(o, family);
   int decided_by = n;  // the decisive refit, if one is
+  // Candidates whose channels hold less excess error than a refit must have
+  // to remove (min_channels_excess) in the current fit: no refit of theirs
+  // could be added (WhyNotSignificant), hold back another (ChooseOfRound) or
+  // start a pair (FirstOfAPair), each of which asks for that excess, set by
+  // the current fit alone; so none is run (measured: the last round of
+  // confusion seed 22076, its two effects found and every channel at
+  // 0.97-1.03 x its noise, refitted five candidates for 6.5 s).
+  std::vector<char> without_excess(n, 0);
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
+    const double excess =
+        ShareOfExcessRemoved(now.fit, now.fit, now.residual_tests, s.channels).excess;
+    if (!(excess >= o.min_channels_excess) && !o.refit_without_excess) {
+      s.channels_excess = excess;
+      s.why_not_confirmed = "not refitted: " + WhyNoExcess(excess, o);
+      without_excess[k] = 1;
+      return;
+    }
     OutputErrorResult refit;
     ReweightingGate reweighting;
     reweighting.min_share = std::min(o.min_share_to_reweight, o.min_share_of_excess);
@@ -237,7 +259,7 @@ std::vector<CandidateRefit> RefitInRankOrder(
   }
   for (int k = 0; k < n; ++k) {
     CandidateScore& s = (*scores)[shortlist[k]];
-    if (set_aside[k]) {
+    if (set_aside[k] || without_excess[k]) {
       Say(o, "  refit " + s.effect + ": " + s.why_not_confirmed);
       continue;
     }
