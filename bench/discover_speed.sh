@@ -18,8 +18,8 @@
 # 20500-20579, 20580-20659, 20660-20739, 20740-20819, 20820-20899,
 # 20900-20979, 20980-21059, 21060-21139, 21140-21219, 21220-21299,
 # 21300-21379, 21380-21459, 21460-21539, 21540-21619, 21620-21699,
-# 21700-21779, 21780-21859, 21860-21939, 21940-22019, 22020-22099 are
-# taken).
+# 21700-21779, 21780-21859, 21860-21939, 21940-22019, 22020-22099,
+# 22100-22179, 22180-22259 are taken).
 # Run on an idle machine: the numbers are wall times. Needs bc and python3.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -49,6 +49,8 @@ sed "s/^seeds: .*/seeds: {count: $count, base: $base}/" "$spec" > "$copy"
 cpu="$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)"
 reference="no build/bench/model_bench"
 model_bench="$(dirname "$coaxid")/bench/model_bench"
+# A binary copied elsewhere (COAXID_BINARY) is timed against this tree's bench.
+[[ -x "$model_bench" ]] || model_bench="$root/build/bench/model_bench"
 if [[ -x "$model_bench" ]]; then
   reference="$("$model_bench" --benchmark_filter='^BM_DerivativeJet<8>/all_effects:0$' \
     --benchmark_min_time=0.5 --benchmark_format=csv 2> /dev/null |
