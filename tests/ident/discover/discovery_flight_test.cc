@@ -201,6 +201,16 @@ INSTANTIATE_TEST_SUITE_P(
                    72}),
     [](const testing::TestParamInfo<EffectCase>& info) { return info.param.effect; });
 
+// The same effects added and the same final estimates (to 1e-9 of each).
+void ExpectTheSameAnswer(const DiscoveryResult& cut, const DiscoveryResult& full) {
+  EXPECT_EQ(cut.added, full.added);
+  const ParameterSet& a = cut.final.result.parameters;
+  const ParameterSet& b = full.final.result.parameters;
+  for (const std::string& name : b.FreeNames()) {
+    EXPECT_NEAR(a.Value(name), b.Value(name), 1e-9 * std::fabs(b.Value(name))) << name;
+  }
+}
+
 // A qualifying refit that removes nearly all of the excess error over all
 // channels decides its round: the refits ranked below it are not run
 // (decisive_share_of_all_excess). Leaving them out changes nothing the loop
@@ -224,12 +234,7 @@ TEST(DiscoverFlight, ARefitThatDecidesItsRoundChangesNothingByLeavingOutTheRest)
     EXPECT_TRUE(s.refit_starts.empty()) << s.effect;
   }
   ASSERT_GT(not_judged, 0) << "no refit decided its round: this case tests nothing";
-  EXPECT_EQ(cut.added, full.added);
-  const ParameterSet& a = cut.final.result.parameters;
-  const ParameterSet& b = full.final.result.parameters;
-  for (const std::string& name : b.FreeNames()) {
-    EXPECT_NEAR(a.Value(name), b.Value(name), 1e-9 * std::fabs(b.Value(name))) << name;
-  }
+  ExpectTheSameAnswer(cut, full);
 }
 
 // A shortlisted candidate whose channels hold less excess error than a
@@ -264,12 +269,7 @@ TEST(DiscoverFlight, ACandidateWithoutExcessInItsChannelsIsNotRefittedAndChanges
     EXPECT_FALSE(same->confirmed) << s.effect;
   }
   ASSERT_GT(left_out, 0) << "every shortlisted candidate had excess to remove: this case tests nothing";
-  EXPECT_EQ(cut.added, full.added);
-  const ParameterSet& a = cut.final.result.parameters;
-  const ParameterSet& b = full.final.result.parameters;
-  for (const std::string& name : b.FreeNames()) {
-    EXPECT_NEAR(a.Value(name), b.Value(name), 1e-9 * std::fabs(b.Value(name))) << name;
-  }
+  ExpectTheSameAnswer(cut, full);
 }
 
 // The loop's answer does not depend on its threads (OutputErrorOptions::
