@@ -199,8 +199,10 @@ nlohmann::json CandidateScore::ToJson() const {
                   {"confirmed", confirmed}};
     if (!plausible) j["refit"]["why_implausible"] = why_implausible;
     if (!confirmed) j["refit"]["why_not_confirmed"] = why_not_confirmed;
+    // A refit that failed has no estimates (why_not_confirmed says why).
     nlohmann::json est = nlohmann::json::object();
     for (const std::string& name : EffectParameterNames(effect)) {
+      if (!parameters.Has(name)) continue;
       nlohmann::json e = {{"value", parameters.Value(name)}};
       for (size_t k = 0; k < identifiability.names.size(); ++k) {
         if (identifiability.names[k] == name) {

@@ -279,6 +279,23 @@ TEST(RefitCandidate, AStartThatEndsAboveTheCurrentFitIsRunAgainFromTheOther) {
 // one above it is re-weighted and Wald-tested as before. The same refit
 // (undeclared CG offset, as above) is judged at a gate just below and just
 // above the share it removes.
+// A refit whose solve failed (RefitCandidate: "the joint refit failed")
+// has no estimates: its candidate's discovery.json says why and lists none.
+// Controllers seed 12523 (a stabilizer bar and rotor drag, flight only):
+// wake_interference's round-1 refit failed at its start, and writing
+// discovery.json threw "unknown parameter 'wake_interference.k_T'" after the
+// whole loop had run (coaxid discover exited 2, nothing written).
+TEST(CandidateScoreJson, ARefitThatFailedListsNoEstimates) {
+  CandidateScore s;
+  s.effect = "wake_interference";
+  s.testable = true;
+  s.refitted = true;
+  s.why_not_confirmed = "the joint refit failed: the solver failed";
+  const nlohmann::json j = s.ToJson();
+  EXPECT_TRUE(j["estimates"].empty()) << j.dump(2);
+  EXPECT_EQ(j["refit"]["why_not_confirmed"], s.why_not_confirmed);
+}
+
 TEST(RefitCandidate, ARefitBelowTheGateIsRejectedBeforeItsReweighting) {
   const std::vector<EstimationLog> logs = CgOffsetFlightAndBalance();
   OutputErrorResult fit;
