@@ -51,7 +51,16 @@ RoundShortlist Shortlist(const std::vector<CandidateScore>& scores,
   };
   std::vector<int> out;
   take(passing, at_most, &out);
-  std::vector<int> at_bounds = blind;
+  // At the bounds: those blind there, then the passing ones the slots left
+  // out that act on a distorted channel (in their rank), then the
+  // symptomatic ones that fail (shortlist.h).
+  std::vector<int> at_bounds = blind, passing_beyond;
+  for (size_t i = at_most; i < passing.size(); ++i) {
+    if (ReachesAny(scores[passing[i]].channels, symptom_channels)) {
+      passing_beyond.push_back(passing[i]);
+    }
+  }
+  at_bounds.insert(at_bounds.end(), passing_beyond.begin(), passing_beyond.end());
   at_bounds.insert(at_bounds.end(), symptomatic.begin(), symptomatic.end());
   take(at_bounds, at_most, &out);
   take(promising, at_most > out.size() ? at_most - out.size() : 0, &out);
@@ -70,11 +79,13 @@ RoundShortlist Shortlist(const std::vector<CandidateScore>& scores,
       list.on_lost_channels.push_back(k);
     }
   }
-  // The slots' symptomatic ones wait for the passing ones' refits, when
-  // there are any.
+  // The at-bounds slots' symptomatic and passing ones wait for the passing
+  // slots' refits, when there are any.
+  auto in = [](const std::vector<int>& group, int k) {
+    return std::find(group.begin(), group.end(), k) != group.end();
+  };
   for (int k : out) {
-    const bool waits = !passing.empty() &&
-                       std::find(symptomatic.begin(), symptomatic.end(), k) != symptomatic.end() &&
+    const bool waits = !passing.empty() && (in(symptomatic, k) || in(passing_beyond, k)) &&
                        !(significant && k == most_significant);
     (waits ? list.after_passing : list.first).push_back(k);
   }

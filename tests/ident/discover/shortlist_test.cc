@@ -4,7 +4,8 @@
 // group capped and ranked by the linearised share, where a share above 1
 // from a step beyond the candidate's bounds (a failed linearisation) ranks
 // last; the most significant by its score test, below alpha before Holm, is
-// refitted too. The symptomatic ones wait for the passing ones' refits.
+// refitted too. The at-bounds ones (passing beyond the slots, then failing)
+// wait for the passing slots' refits.
 #include "ident/discover/shortlist.h"
 
 #include <string>
@@ -232,6 +233,37 @@ TEST(Shortlist, PassingFirstThenAtBoundsThenPromisingEachCapped) {
   const std::vector<CandidateScore> few = {Score("a", 0.5, true), Score("f", 0.6),
                                            Score("g", 0.1), Score("x", 0.9)};
   EXPECT_EQ(Names(few, Shortlist(few, {}, {"x"}, 3, 0.3, 0.01).All()), (std::vector<std::string>{"a", "f"}));
+}
+
+// Confusion seed 21387 (a swashplate bias and wind, low flight, flight
+// only), round 1: Cx, Cy, Ixx, Iyy and sigma0 at bounds, six candidates
+// passing. The three slots took the bar, wake and an accelerometer bias,
+// the at-bounds slots three that failed their score test (rotor drag, servo
+// lag, gyroscopic), and the bias and the wind, passing at p 1e-15 and 2e-6,
+// were never refitted: nothing was added. The passing ones the slots leave
+// out and that act on a distorted channel now take the at-bounds slots
+// first, waiting for the slots' refits as the failing ones did; those go to
+// the lost channels' list.
+TEST(Shortlist, PassingOnesTheSlotsLeaveOutComeBeforeFailingOnesAtTheBounds) {
+  const std::vector<std::string> p = {"p"};
+  const std::vector<CandidateScore> scores = {
+      Score("stabilizer_bar", 0.211, true, p), Score("wake_interference", 0.122, true, p),
+      Score("accel_bias", 0.0845, true, p),    Score("cg_offset", 0.0764, true, p),
+      Score("swashplate_bias", 0.0636, true, p), Score("wind", 0.0075, true, p),
+      Score("rotor_drag", 0.0163, false, p),   Score("servo_lag", 0.002, false, p),
+      Score("gyroscopic", 0.0016, false, p)};
+  const RoundShortlist list = Shortlist(scores, p, {}, 3, 0.3, 0.01, p);
+  EXPECT_EQ(Names(scores, list.first),
+            (std::vector<std::string>{"stabilizer_bar", "wake_interference", "accel_bias"}));
+  EXPECT_EQ(Names(scores, list.after_passing),
+            (std::vector<std::string>{"cg_offset", "swashplate_bias", "wind"}));
+  EXPECT_EQ(Names(scores, list.on_lost_channels),
+            (std::vector<std::string>{"rotor_drag", "servo_lag", "gyroscopic"}));
+  // A passing one that acts on no distorted channel stays out.
+  std::vector<CandidateScore> elsewhere = scores;
+  elsewhere[4].channels = {"r"};
+  EXPECT_EQ(Names(elsewhere, Shortlist(elsewhere, p, {}, 3, 0.3, 0.01, p).after_passing),
+            (std::vector<std::string>{"cg_offset", "wind", "rotor_drag"}));
 }
 
 }  // namespace
