@@ -273,12 +273,6 @@ TEST(RefitCandidate, AStartThatEndsAboveTheCurrentFitIsRunAgainFromTheOther) {
   EXPECT_LT(again.refit_starts[0].cost, current);
 }
 
-// A refit whose kept start removes less than the gate's share of its
-// channels' excess error at the current weights is rejected before its noise
-// re-weighting, reporting that share (DiscoveryOptions::min_share_to_reweight);
-// one above it is re-weighted and Wald-tested as before. The same refit
-// (undeclared CG offset, as above) is judged at a gate just below and just
-// above the share it removes.
 // A refit whose solve failed (RefitCandidate: "the joint refit failed")
 // has no estimates: its candidate's discovery.json says why and lists none.
 // Controllers seed 12523 (a stabilizer bar and rotor drag, flight only):
@@ -296,6 +290,12 @@ TEST(CandidateScoreJson, ARefitThatFailedListsNoEstimates) {
   EXPECT_EQ(j["refit"]["why_not_confirmed"], s.why_not_confirmed);
 }
 
+// A refit whose kept start removes less than the gate's share of its
+// channels' excess error at the current weights is rejected before its noise
+// re-weighting, reporting that share (DiscoveryOptions::min_share_to_reweight);
+// one above it is re-weighted and Wald-tested as before. The same refit
+// (undeclared CG offset, as above) is judged at a gate just below and just
+// above the share it removes.
 TEST(RefitCandidate, ARefitBelowTheGateIsRejectedBeforeItsReweighting) {
   const std::vector<EstimationLog> logs = CgOffsetFlightAndBalance();
   OutputErrorResult fit;
