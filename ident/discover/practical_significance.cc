@@ -40,6 +40,12 @@ ExcessShare ShareOfExcessRemoved(const std::map<std::string, FitError>& before,
   return out;
 }
 
+double ChannelsExcess(const std::map<std::string, FitError>& fit,
+                      const std::vector<ChannelResidualTest>& tests,
+                      const std::vector<std::string>& channels) {
+  return ShareOfExcessRemoved(fit, fit, tests, channels).excess;
+}
+
 double HeldOutShareOfExcessRemoved(const ExcessShare& estimation,
                                    const std::map<std::string, FitError>& before,
                                    const std::map<std::string, FitError>& after,

@@ -38,6 +38,13 @@ ExcessShare ShareOfExcessRemoved(const std::map<std::string, FitError>& before,
                                  const std::vector<ChannelResidualTest>& tests,
                                  const std::vector<std::string>& channels);
 
+// The excess of `channels` in `fit` alone (ExcessShare::excess, the share's
+// denominator): a refit's gates need at least min_channels_excess of it,
+// which the current fit sets before any refit runs.
+double ChannelsExcess(const std::map<std::string, FitError>& fit,
+                      const std::vector<ChannelResidualTest>& tests,
+                      const std::vector<std::string>& channels);
+
 // The share of the excess of `channels` removed from `before` to `after` on
 // held-out logs (residual tests `tests` of `before`), where they can judge
 // it: NaN when less than half of what the change removed on the estimation

@@ -166,8 +166,7 @@ std::vector<CandidateRefit> RefitInRankOrder(
   std::vector<char> without_excess(n, 0);
   auto evaluate = [&](int k) {
     CandidateScore& s = (*scores)[shortlist[k]];
-    const double excess =
-        ShareOfExcessRemoved(now.fit, now.fit, now.residual_tests, s.channels).excess;
+    const double excess = ChannelsExcess(now.fit, now.residual_tests, s.channels);
     if (!(excess >= o.min_channels_excess) && !o.refit_without_excess) {
       s.channels_excess = excess;
       s.why_not_confirmed = "not refitted: " + WhyNoExcess(excess, o);

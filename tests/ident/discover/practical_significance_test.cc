@@ -53,6 +53,18 @@ TEST(PracticalSignificance, NoExcessMeansNoShare) {
   EXPECT_EQ(s.share, 0);
 }
 
+// The excess a fit leaves in a candidate's channels, known before any refit:
+// a: noise 1, ms 4 (3 noise variances); b: below its noise (0, not -0.19);
+// c: not the candidate's.
+TEST(PracticalSignificance, ChannelsExcessIsTheFitsOwnInNoiseUnits) {
+  const std::vector<ChannelResidualTest> tests = {Residual("a", 2, 1, 100),
+                                                  Residual("b", 0.9, 1, 100),
+                                                  Residual("c", 10, 1, 10)};
+  const std::map<std::string, FitError> fit = {{"a", Rms(2)}, {"b", Rms(0.9)}, {"c", Rms(10)}};
+  EXPECT_NEAR(ChannelsExcess(fit, tests, {"a", "b"}), 3, 1e-12);
+  EXPECT_EQ(ChannelsExcess(fit, tests, {"b"}), 0);
+}
+
 TEST(PracticalSignificance, WeightedExcessIsInTheFitsWeightedUnits) {
   // count (rms^2 - noise^2) / weight^2: 100 (4 - 1) / 4 + 50 max(0, 0.5 - 1) / 1.
   const std::vector<ChannelResidualTest> tests = {Residual("a", 2, 1, 100),
