@@ -33,6 +33,19 @@ bool FlightOutputJacobians(const VehicleModel& model, const Eigen::VectorXd& the
       theta, x, model.NumStates(), kNumFlightChannels, parameter_indices, y, dydx, dydp);
 }
 
+bool FlightOutputTangents(const VehicleModel& model, const Eigen::VectorXd& theta,
+                          const double* x, const HeldInput& input,
+                          const std::vector<int>& parameter_indices,
+                          const Eigen::MatrixXd& x_tangents,
+                          const Eigen::MatrixXd& theta_tangents, double* y, Eigen::MatrixXd* dy) {
+  return AutodiffTangents(
+      [&](const auto* th, const auto* xx, auto* out) {
+        FlightOutputsAt(model, th, xx, input, out);
+      },
+      theta, x, model.NumStates(), kNumFlightChannels, parameter_indices, x_tangents,
+      theta_tangents, y, dy);
+}
+
 bool BalanceOutputJacobians(const VehicleModel& model, const Eigen::VectorXd& theta,
                             const InputVector& input, const std::vector<int>& parameter_indices,
                             double* y, Eigen::MatrixXd* dydp) {

@@ -29,6 +29,15 @@ bool FlightOutputJacobians(const VehicleModel& model, const Eigen::VectorXd& the
                            const std::vector<int>& parameter_indices, double* y,
                            Eigen::MatrixXd* dydx, Eigen::MatrixXd* dydp);
 
+// The 15 flight outputs y and their tangents dy (15 x m) = dy/dx x_tangents
+// (12 x m) + dy/dtheta[parameter_indices] theta_tangents (P x m): with a
+// state's sensitivities S as x_tangents, the outputs' (AutodiffTangents).
+bool FlightOutputTangents(const VehicleModel& model, const Eigen::VectorXd& theta,
+                          const double* x, const HeldInput& input,
+                          const std::vector<int>& parameter_indices,
+                          const Eigen::MatrixXd& x_tangents,
+                          const Eigen::MatrixXd& theta_tangents, double* y, Eigen::MatrixXd* dy);
+
 // The 10 balance outputs and their Jacobian w.r.t. theta[parameter_indices].
 bool BalanceOutputJacobians(const VehicleModel& model, const Eigen::VectorXd& theta,
                             const InputVector& input, const std::vector<int>& parameter_indices,

@@ -153,6 +153,7 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
   const Trajectory* simulated = Simulate(parameters[0], parameters[1], sensitivities);
   if (!simulated) return false;
   const Trajectory& trajectory = *simulated;
+  if (sensitivities) CHECK_EQ(trajectory.sensitivities.front().cols(), n_ + P);
   struct OutputTimer {
     SegmentCostTimes* times;
     std::chrono::steady_clock::time_point start;
@@ -171,10 +172,15 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
       want_theta ? jacobians[1] : nullptr, want_theta ? num_residuals : 0, P);
 
   double y[kNumFlightChannels];
-  Eigen::MatrixXd dydx, dydp;
   // The accelerometer, and every channel under a measurement effect (a gyro
-  // bias), needs the output model and its Jacobians; plain states are read
-  // directly.
+  // bias), needs the output model, and its sensitivities
+  // dy = dy/dx S + dy/dtheta [0 | I] (FlightOutputTangents: S's state
+  // columns, then its parameter columns); plain states are read directly.
+  Eigen::MatrixXd dy, theta_tangents;
+  if (sensitivities) {
+    theta_tangents.setZero(P, n_ + P);
+    theta_tangents.rightCols(P).setIdentity();
+  }
   const bool states_are_logged = !model_.ChangesFlightMeasurements();
   size_t term = 0;
   for (int k : rows_) {
@@ -185,11 +191,14 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
       needs_model = needs_model || terms_[t].channel >= kNumStates;
     }
     if (needs_model) {
-      if (!FlightOutputJacobians(model_, theta, x.data(), trajectory.inputs[i], free_.indices(),
-                                 y, sensitivities ? &dydx : nullptr,
-                                 want_theta ? &dydp : nullptr)) {
-        return false;
-      }
+      const bool ok =
+          sensitivities
+              ? FlightOutputTangents(model_, theta, x.data(), trajectory.inputs[i],
+                                     free_.indices(), trajectory.sensitivities[i],
+                                     theta_tangents, y, &dy)
+              : FlightOutputJacobians(model_, theta, x.data(), trajectory.inputs[i],
+                                      free_.indices(), y, nullptr, nullptr);
+      if (!ok) return false;
     } else {
       for (int s = 0; s < kNumStates; ++s) y[s] = x[s];
     }
@@ -206,11 +215,10 @@ bool FlightSegmentCost::Evaluate(double const* const* parameters, double* residu
               weight * S.block(t.channel, n_, 1, P).cwiseProduct(free_.scales().transpose());
         }
       } else {
-        const Eigen::RowVectorXd dx = dydx.row(t.channel);
-        if (want_state) J_state.row(term) = weight * dx * S.leftCols(n_);
+        if (want_state) J_state.row(term) = weight * dy.row(t.channel).head(n_);
         if (want_theta) {
-          J_theta.row(term) = weight * (dx * S.rightCols(P) + dydp.row(t.channel))
-                                             .cwiseProduct(free_.scales().transpose());
+          J_theta.row(term) =
+              weight * dy.row(t.channel).tail(P).cwiseProduct(free_.scales().transpose());
         }
       }
     }

@@ -227,6 +227,47 @@ TEST(ModelJacobianTest, FlightOutputsMatchCentralDifferencesWithAllEffects) {
   }
 }
 
+// FlightOutputTangents is dy/dx X + dy/dtheta[subset] T for any tangents:
+// 21 directions (two full chunks of jets and a partial one), random, every
+// effect on, parameters in any order. The two sides are the same sums in
+// another order: equal to rounding, 1e-12 of the terms' magnitudes.
+TEST(ModelJacobianTest, FlightOutputTangentsAreTheJacobiansTimesTheTangents) {
+  const Vehicle v = AllEffects();
+  const Eigen::VectorXd theta = v.parameters.Values();
+  const std::vector<int> indices = {kIzz, v.parameters.IndexOrThrow("cg_offset.y_g"), kAlpha,
+                                    v.parameters.IndexOrThrow("gyro_bias.b_q"), kCx, kGamma2};
+  const int nx = v.model.NumStates(), np = static_cast<int>(indices.size()), m = 21;
+  std::mt19937 rng(5005u);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd X(nx, m), T(np, m);
+  for (int j = 0; j < m; ++j) {
+    for (int i = 0; i < nx; ++i) X(i, j) = normal(rng);
+    for (int k = 0; k < np; ++k) T(k, j) = normal(rng);
+  }
+  for (const Case& c : NearHoverCases(6006u, 3)) {
+    const HeldInput u = HeldInput::Steady(c.input, 0);
+    double y[kNumFlightChannels], y_tangents[kNumFlightChannels];
+    Eigen::MatrixXd dydx, dydp, dy;
+    ASSERT_TRUE(FlightOutputJacobians(v.model, theta, c.x.data(), u, indices, y, &dydx, &dydp));
+    ASSERT_TRUE(FlightOutputTangents(v.model, theta, c.x.data(), u, indices, X, T, y_tangents, &dy));
+    ASSERT_EQ(dy.rows(), kNumFlightChannels);
+    ASSERT_EQ(dy.cols(), m);
+    const Eigen::MatrixXd expected = dydx * X + dydp * T;
+    const Eigen::MatrixXd size = dydx.cwiseAbs() * X.cwiseAbs() + dydp.cwiseAbs() * T.cwiseAbs();
+    for (int i = 0; i < kNumFlightChannels; ++i) {
+      EXPECT_EQ(y_tangents[i], y[i]) << FlightChannelName(i);
+      for (int j = 0; j < m; ++j) {
+        EXPECT_NEAR(dy(i, j), expected(i, j), 1e-12 * size(i, j))
+            << FlightChannelName(i) << ", direction " << j;
+      }
+    }
+    // Not void: every output channel moves along some direction.
+    for (int i = 0; i < kNumFlightChannels; ++i) {
+      EXPECT_GT(dy.row(i).cwiseAbs().maxCoeff(), 0.0) << FlightChannelName(i);
+    }
+  }
+}
+
 // A subset of parameters in arbitrary order: column k is the derivative with
 // respect to parameter_indices[k], whatever the order (the chunking of the
 // Jet directions must not mix them up).
