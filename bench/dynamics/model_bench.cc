@@ -1,9 +1,12 @@
 // Cost of one evaluation of the templated vehicle model
 // (dynamics/vehicle_model.h): VehicleModel::Derivative with double (target:
 // under 0.2 us, it runs inside every integrator step), with ceres::Jet<double,
-// 8> and Jet<double, 12> (the EKF's and Ceres' Jacobians), and
+// 8> and Jet<double, 12> (the EKF's and Ceres' Jacobians; 16, 24 and 32: the
+// widths a Jacobian pass could take, dynamics/autodiff.h), and
 // DerivativeJacobians with the 12 unknown base parameters; each with no effect
-// (the paper's model) and with every effect of the library enabled.
+// (the paper's model) and with every effect of the library enabled; and
+// DerivativeJacobians with every effect over 4-20 parameters (the widths of
+// the Jet passes, dynamics/autodiff.h).
 //
 // Run: model_bench [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
@@ -87,6 +90,9 @@ void BM_DerivativeJet(benchmark::State& state) {
 }
 BENCHMARK_TEMPLATE(BM_DerivativeJet, 8)->ArgName("all_effects")->Arg(0)->Arg(1);
 BENCHMARK_TEMPLATE(BM_DerivativeJet, 12)->ArgName("all_effects")->Arg(0)->Arg(1);
+BENCHMARK_TEMPLATE(BM_DerivativeJet, 16)->ArgName("all_effects")->Arg(0)->Arg(1);
+BENCHMARK_TEMPLATE(BM_DerivativeJet, 24)->ArgName("all_effects")->Arg(0)->Arg(1);
+BENCHMARK_TEMPLATE(BM_DerivativeJet, 32)->ArgName("all_effects")->Arg(0)->Arg(1);
 
 // df/dx (12 x 12) and df/dp over the 12 unknown base parameters (12 x 12).
 void BM_DerivativeJacobians12Unknowns(benchmark::State& state) {
@@ -107,6 +113,27 @@ void BM_DerivativeJacobians12Unknowns(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_DerivativeJacobians12Unknowns)->ArgName("all_effects")->Arg(0)->Arg(1);
+
+// df/dx and df/dp with every effect over the first P parameters: 12 + P
+// directions, so every mix of pass widths (dynamics/autodiff.h).
+void BM_DerivativeJacobiansWithParameters(benchmark::State& state) {
+  const Vehicle& v = BenchVehicle(true);
+  const Eigen::VectorXd theta = v.parameters.Values();
+  const State x = BenchState();
+  std::vector<int> indices;
+  for (int i = 0; i < state.range(0) && i < theta.size(); ++i) indices.push_back(i);
+  Eigen::MatrixXd dfdx, dfdp;
+  for (auto _ : state) {
+    const bool ok =
+        DerivativeJacobians(v.model, theta, x.data(), HeldInput::Steady(kBenchInput, 0), 0, indices,
+                            &dfdx, &dfdp);
+    benchmark::DoNotOptimize(ok);
+    benchmark::DoNotOptimize(dfdx.data());
+    benchmark::DoNotOptimize(dfdp.data());
+    benchmark::ClobberMemory();
+  }
+}
+BENCHMARK(BM_DerivativeJacobiansWithParameters)->ArgName("P")->Arg(4)->Arg(8)->Arg(12)->Arg(16)->Arg(20);
 
 }  // namespace
 }  // namespace coaxid

@@ -30,6 +30,7 @@
 #include <map>
 #include <random>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/input_hold.h"
@@ -330,7 +331,7 @@ TEST(ModelJacobianTest, ReportsNonFiniteDerivatives) {
 TEST(ModelJacobianTest, ReportsANonFiniteDerivativeOfAFiniteValue) {
   // y0 = theta_k * x0, y1 = sqrt(x_j) + sqrt(theta_m): at x_j = 0 (theta_m =
   // 0) the value is 0 and dy1/dx_j (dy1/dtheta_m) infinite.
-  const int nx = 11;  // beyond one pass of kAutodiffChunk directions
+  const int nx = 19;  // 21 directions: a kAutodiffWideChunk pass, then a kAutodiffChunk one
   auto f = [](const auto* th, const auto* x, auto* y) {
     using std::sqrt;
     y[0] = th[0] * x[0];
@@ -345,12 +346,106 @@ TEST(ModelJacobianTest, ReportsANonFiniteDerivativeOfAFiniteValue) {
   EXPECT_DOUBLE_EQ(dydx(1, nx - 1), 0.5);
   EXPECT_DOUBLE_EQ(dydp(0, 0), 1.0);
   EXPECT_DOUBLE_EQ(dydp(1, 1), 0.5);
-  x[nx - 1] = 0.0;  // in the second pass's directions
+  x[nx - 1] = 0.0;  // in the second pass's directions (direction 18)
   EXPECT_FALSE(AutodiffJacobian(f, theta, x.data(), nx, 2, {0, 2}, y, &dydx, &dydp));
   x[nx - 1] = 1.0;
   Eigen::VectorXd at_zero = theta;
   at_zero[2] = 0.0;
   EXPECT_FALSE(AutodiffJacobian(f, at_zero, x.data(), nx, 2, {0, 2}, nullptr, nullptr, &dydp));
+}
+
+// Every direction lands in its own column whatever the number of directions,
+// and so whatever the mix of pass widths (autodiff_internal::ForEachPass:
+// kAutodiffWideChunk-wide passes, then a kAutodiffChunk-wide one): a
+// function whose Jacobian is known in closed form, 1 to 40 directions split
+// between x and theta (the parameters taken in reverse order), and the
+// tangents along random directions against that Jacobian times them. A
+// direction seeded in the wrong lane, skipped or seeded twice moves a
+// column by O(1).
+TEST(AutodiffTest, EveryDirectionInItsColumnWhateverTheirNumber) {
+  std::mt19937 rng(7007u);
+  std::normal_distribution<double> normal;
+  for (int directions = 1; directions <= 40; ++directions) {
+    const int nx = (directions + 1) / 2, np = directions - nx, ny = 3;
+    const int nth = np + 2;
+    Eigen::VectorXd theta(nth);
+    for (int k = 0; k < nth; ++k) theta[k] = 0.5 + 0.25 * k;
+    std::vector<int> indices(np);
+    for (int k = 0; k < np; ++k) indices[k] = np - k;  // theta[np], ..., theta[1]
+    std::vector<double> x(nx);
+    for (int i = 0; i < nx; ++i) x[i] = 1.0 + 0.125 * i;
+    // y0 = sum_i (i + 1) x_i^2 + sum_k (k + 1) theta_k, y1 = x_0 sum_k theta_k^2,
+    // y2 = sum_i x_i theta_(i mod nth).
+    auto f = [nx, nth](const auto* th, const auto* xx, auto* y) {
+      using T = std::remove_cv_t<std::remove_pointer_t<decltype(th)>>;
+      T sum_sq(0.0);
+      y[0] = T(0.0);
+      y[2] = T(0.0);
+      for (int i = 0; i < nx; ++i) {
+        y[0] += double(i + 1) * xx[i] * xx[i];
+        y[2] += xx[i] * th[i % nth];
+      }
+      for (int k = 0; k < nth; ++k) {
+        y[0] += double(k + 1) * th[k];
+        sum_sq += th[k] * th[k];
+      }
+      y[1] = xx[0] * sum_sq;
+    };
+    Eigen::MatrixXd dydx_expected = Eigen::MatrixXd::Zero(ny, nx);
+    Eigen::MatrixXd dydtheta = Eigen::MatrixXd::Zero(ny, nth);  // every theta
+    double sum_sq = 0;
+    for (int k = 0; k < nth; ++k) sum_sq += theta[k] * theta[k];
+    for (int i = 0; i < nx; ++i) {
+      dydx_expected(0, i) = 2.0 * (i + 1) * x[i];
+      dydx_expected(2, i) = theta[i % nth];
+      dydtheta(2, i % nth) += x[i];
+    }
+    dydx_expected(1, 0) = sum_sq;
+    for (int k = 0; k < nth; ++k) {
+      dydtheta(0, k) = k + 1;
+      dydtheta(1, k) = 2.0 * x[0] * theta[k];
+    }
+    Eigen::MatrixXd dydp_expected(ny, np);
+    for (int k = 0; k < np; ++k) dydp_expected.col(k) = dydtheta.col(indices[k]);
+
+    Eigen::MatrixXd dydx, dydp;
+    double y[3];
+    ASSERT_TRUE(AutodiffJacobian(f, theta, x.data(), nx, ny, indices, y, &dydx, &dydp));
+    ASSERT_EQ(dydx.cols(), nx);
+    ASSERT_EQ(dydp.cols(), np);
+    const double tol = 1e-13 * (1.0 + dydx_expected.cwiseAbs().maxCoeff() +
+                                (np > 0 ? dydp_expected.cwiseAbs().maxCoeff() : 0.0));
+    for (int r = 0; r < ny; ++r) {
+      for (int i = 0; i < nx; ++i) {
+        EXPECT_NEAR(dydx(r, i), dydx_expected(r, i), tol)
+            << directions << " directions: dy" << r << "/dx" << i;
+      }
+      for (int k = 0; k < np; ++k) {
+        EXPECT_NEAR(dydp(r, k), dydp_expected(r, k), tol)
+            << directions << " directions: dy" << r << "/dtheta" << indices[k];
+      }
+    }
+    // The tangents along m random directions: m runs over the pass widths too.
+    const int m = directions;
+    Eigen::MatrixXd X(nx, m), Th(np, m);
+    for (int j = 0; j < m; ++j) {
+      for (int i = 0; i < nx; ++i) X(i, j) = normal(rng);
+      for (int k = 0; k < np; ++k) Th(k, j) = normal(rng);
+    }
+    Eigen::MatrixXd dy;
+    double y_tangents[3];
+    ASSERT_TRUE(AutodiffTangents(f, theta, x.data(), nx, ny, indices, X, Th, y_tangents, &dy));
+    const Eigen::MatrixXd expected = dydx_expected * X + dydp_expected * Th;
+    const Eigen::MatrixXd size =
+        dydx_expected.cwiseAbs() * X.cwiseAbs() + dydp_expected.cwiseAbs() * Th.cwiseAbs();
+    for (int r = 0; r < ny; ++r) {
+      EXPECT_EQ(y_tangents[r], y[r]);
+      for (int j = 0; j < m; ++j) {
+        EXPECT_NEAR(dy(r, j), expected(r, j), 1e-13 * (1.0 + size(r, j)))
+            << directions << " directions: tangent " << j << " of y" << r;
+      }
+    }
+  }
 }
 
 // A rotor pushing down (a trial point of a refit far from the truth) makes eq. 46's radicand negative and large; written as radicand +
