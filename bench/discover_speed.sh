@@ -12,7 +12,7 @@
 #
 #   bench/discover_speed.sh [SPEC] [BASE_SEED] [COUNT] [FLIGHT_S]
 #   bench/discover_speed.sh configs/studies/discover_confusion.yaml 20000 40
-#   bench/discover_speed.sh configs/studies/discover_confusion.yaml 22580 80 60
+#   bench/discover_speed.sh configs/studies/discover_confusion.yaml 22660 80 60
 #
 # FLIGHT_S (optional) makes every flight that long: the spec's duration_s
 # range becomes [FLIGHT_S, FLIGHT_S] (the study draws 30-60 s; issue 13's
@@ -24,8 +24,8 @@
 # 20900-20979, 20980-21059, 21060-21139, 21140-21219, 21220-21299,
 # 21300-21379, 21380-21459, 21460-21539, 21540-21619, 21620-21699,
 # 21700-21779, 21780-21859, 21860-21939, 21940-22019, 22020-22099,
-# 22100-22179, 22180-22259, 22260-22339, 22340-22419, 22420-22499 are
-# taken; of discover_controllers.yaml, 22500-22579).
+# 22100-22179, 22180-22259, 22260-22339, 22340-22419, 22420-22499,
+# 22580-22659 are taken; of discover_controllers.yaml, 22500-22579).
 # Run on an idle machine: the numbers are wall times. Needs bc and python3.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"

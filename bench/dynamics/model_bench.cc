@@ -94,13 +94,11 @@ BENCHMARK_TEMPLATE(BM_DerivativeJet, 16)->ArgName("all_effects")->Arg(0)->Arg(1)
 BENCHMARK_TEMPLATE(BM_DerivativeJet, 24)->ArgName("all_effects")->Arg(0)->Arg(1);
 BENCHMARK_TEMPLATE(BM_DerivativeJet, 32)->ArgName("all_effects")->Arg(0)->Arg(1);
 
-// df/dx (12 x 12) and df/dp over the 12 unknown base parameters (12 x 12).
-void BM_DerivativeJacobians12Unknowns(benchmark::State& state) {
-  const Vehicle& v = BenchVehicle(state.range(0) != 0);
+// DerivativeJacobians of `v` at the bench state over theta[indices].
+void TimeDerivativeJacobians(benchmark::State& state, const Vehicle& v,
+                             const std::vector<int>& indices) {
   const Eigen::VectorXd theta = v.parameters.Values();
   const State x = BenchState();
-  std::vector<int> indices;
-  for (int i = kAlpha; i < kNumBaseParameters; ++i) indices.push_back(i);
   Eigen::MatrixXd dfdx, dfdp;
   for (auto _ : state) {
     const bool ok =
@@ -112,26 +110,24 @@ void BM_DerivativeJacobians12Unknowns(benchmark::State& state) {
     benchmark::ClobberMemory();
   }
 }
+
+// df/dx (12 x 12) and df/dp over the 12 unknown base parameters (12 x 12).
+void BM_DerivativeJacobians12Unknowns(benchmark::State& state) {
+  std::vector<int> indices;
+  for (int i = kAlpha; i < kNumBaseParameters; ++i) indices.push_back(i);
+  TimeDerivativeJacobians(state, BenchVehicle(state.range(0) != 0), indices);
+}
 BENCHMARK(BM_DerivativeJacobians12Unknowns)->ArgName("all_effects")->Arg(0)->Arg(1);
 
 // df/dx and df/dp with every effect over the first P parameters: 12 + P
 // directions, so every mix of pass widths (dynamics/autodiff.h).
 void BM_DerivativeJacobiansWithParameters(benchmark::State& state) {
   const Vehicle& v = BenchVehicle(true);
-  const Eigen::VectorXd theta = v.parameters.Values();
-  const State x = BenchState();
   std::vector<int> indices;
-  for (int i = 0; i < state.range(0) && i < theta.size(); ++i) indices.push_back(i);
-  Eigen::MatrixXd dfdx, dfdp;
-  for (auto _ : state) {
-    const bool ok =
-        DerivativeJacobians(v.model, theta, x.data(), HeldInput::Steady(kBenchInput, 0), 0, indices,
-                            &dfdx, &dfdp);
-    benchmark::DoNotOptimize(ok);
-    benchmark::DoNotOptimize(dfdx.data());
-    benchmark::DoNotOptimize(dfdp.data());
-    benchmark::ClobberMemory();
+  for (int i = 0; i < state.range(0) && i < v.parameters.Values().size(); ++i) {
+    indices.push_back(i);
   }
+  TimeDerivativeJacobians(state, v, indices);
 }
 BENCHMARK(BM_DerivativeJacobiansWithParameters)->ArgName("P")->Arg(4)->Arg(8)->Arg(12)->Arg(16)->Arg(20);
 
