@@ -40,9 +40,10 @@ class DiscoverOnADraw : public CliTestDir {
   // balance log, if it has one: draw.scenarios, in that order) with its
   // held-out flight; null, with a test failure, when the draw lacks the
   // flight or the held-out flight, or the program fails. The logs and
-  // outputs go to the test's folder, their names led by `prefix`.
+  // outputs go to the test's folder, their names led by `prefix`; `flags`
+  // are added to the command line.
   nlohmann::json Discover(const StudySpec& spec, const RandomDraw& draw,
-                          const std::string& prefix = "") {
+                          const std::string& prefix = "", const std::string& flags = "") {
     if (draw.scenarios.empty() || draw.scenarios.size() > 2 || !draw.has_held_out) {
       ADD_FAILURE() << "the draw holds " << draw.scenarios.size()
                     << " estimation logs (a flight, and a balance log or none, wanted) and "
@@ -58,7 +59,8 @@ class DiscoverOnADraw : public CliTestDir {
     const std::string held_out = simulate(draw.held_out, prefix + "held_out.csv");
     const RunResult run = RunCoaxid("discover --config=" + config_ + " --logs=" + logs +
                                     " --validate=" + held_out +
-                                    " --noise_relaxations=1 --out=" + Path(prefix + "out"));
+                                    " --noise_relaxations=1 --out=" + Path(prefix + "out") +
+                                    (flags.empty() ? "" : " " + flags));
     if (run.status != 0) {
       ADD_FAILURE() << run.output;
       return nullptr;
@@ -69,7 +71,8 @@ class DiscoverOnADraw : public CliTestDir {
 
   // The confusion spec's draw of `seed` (*draw), which must be flight only
   // and hold `truth`, through Discover; null, with a test failure, if not.
-  nlohmann::json DiscoverFlightOnly(uint64_t seed, const std::string& truth, RandomDraw* draw) {
+  nlohmann::json DiscoverFlightOnly(uint64_t seed, const std::string& truth, RandomDraw* draw,
+                                    const std::string& flags = "") {
     const StudySpec spec = ConfusionSpec();
     *draw = DrawRun(spec, seed);
     if (draw->truth_label != truth || draw->scenarios.size() != 1) {
@@ -78,7 +81,7 @@ class DiscoverOnADraw : public CliTestDir {
                     << ", flight only, wanted)";
       return nullptr;
     }
-    return Discover(spec, *draw);
+    return Discover(spec, *draw, "", flags);
   }
 
   // The effects a discovery.json added, sorted.

@@ -34,6 +34,10 @@ DEFINE_double(min_share_to_pair, coaxid::DiscoveryOptions().min_share_to_pair,
 DEFINE_double(fit_rate_hz, coaxid::DiscoveryOptions().fit_rate_hz,
               "discover: fit flight logs sampled faster than this [Hz] with runs of their rows "
               "averaged (pairs at 200 Hz; each fit costs half); 0: every log at its own rate");
+DEFINE_double(search_window_s, coaxid::DiscoveryOptions().search_window_s,
+              "discover: search flight logs longer than twice this [s] on their first "
+              "search_window_s, then confirm what that adds on the whole logs and search them "
+              "once more; 0: search the whole logs");
 DECLARE_double(segment_s);
 
 namespace coaxid {
@@ -43,7 +47,8 @@ namespace fs = std::filesystem;
 
 constexpr const char* kDiscoverUsage =
     "usage: coaxid discover --logs=A.csv[,B.csv] --config=F --out=DIR [--validate=C.csv] "
-    "[--holdout_fraction=0.2] [--alpha=0.01] [--max_added=4] [--segment_s=1] [--fit_rate_hz=100]";
+    "[--holdout_fraction=0.2] [--alpha=0.01] [--max_added=4] [--segment_s=1] [--fit_rate_hz=100] "
+    "[--search_window_s=20]";
 
 std::string Num(double v, const char* fmt = "%.4g") {
   if (!std::isfinite(v)) return "-";
@@ -151,6 +156,20 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
     for (const LogAtFitRate& a : *set) o << "- " << a.note << "\n";
   }
   o << "\n";
+  const DiscoveryResult::SearchWindow& w = r.search_window;
+  if (!w.logs.empty()) {
+    o << "Search window: the first " << Num(w.seconds) << " s of ";
+    for (const std::string& l : w.logs) o << "`" << l << "` ";
+    if (w.used) {
+      o << "were searched (round" << (w.rounds > 1 ? "s 1-" : " ") << w.rounds << ", which added "
+        << (w.added.empty() ? std::string("nothing") : Joined(w.added, ", "))
+        << "); the declared model and the model they ended with were then fitted to the whole "
+           "logs, what they added judged again there, and the later rounds ran on the whole "
+           "logs.\n\n";
+    } else {
+      o << "were to be searched first, but " << w.note << ": the whole logs were searched.\n\n";
+    }
+  }
   o << "Declared effects: ";
   const auto declared = r.baseline.vehicle.EffectNames();
   o << (declared.empty() ? "none (the paper's model)" : "");
@@ -302,6 +321,7 @@ int RunDiscover() {
   options.min_share_of_excess = FLAGS_min_share_of_excess;
   options.window_s = FLAGS_segment_s;
   options.fit_rate_hz = FLAGS_fit_rate_hz;
+  options.search_window_s = FLAGS_search_window_s;
   options.min_share_to_pair = FLAGS_min_share_to_pair;
   options.fit.segment_schedule_s = {std::min(0.25, FLAGS_segment_s), FLAGS_segment_s};
   if (FLAGS_segment_s <= 0.25) options.fit.segment_schedule_s = {FLAGS_segment_s};

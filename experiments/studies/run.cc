@@ -185,8 +185,15 @@ nlohmann::json DiscoverRun(const StudySpec& spec, const Vehicle& start, const Ve
   for (const RemovedEffect& e : r.removed) {
     removed.push_back({{"round", e.round}, {"effect", e.effect}});
   }
+  // The search on a window of the flight (DiscoveryOptions::search_window_s):
+  // null if the flight was searched whole from the start.
+  const DiscoveryResult::SearchWindow& w = r.search_window;
+  const nlohmann::json search_window =
+      w.logs.empty() ? nlohmann::json()
+                     : nlohmann::json{{"used", w.used}, {"rounds", w.rounds}, {"added", w.added}};
   return {{"ok", true},
           {"added", r.added},
+          {"search_window", search_window},
           {"removed", removed},
           {"refits", refits},
           {"unexplained", unexplained},

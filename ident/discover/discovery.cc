@@ -209,6 +209,10 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
     *why = "fit_rate_hz must be >= 0 (0: every log at its own rate)";
     return false;
   }
+  if (!(search_window_s >= 0 && std::isfinite(search_window_s))) {
+    *why = "search_window_s must be >= 0 (0: whole logs only)";
+    return false;
+  }
   if (!(min_channels_excess >= 0)) {
     *why = "min_channels_excess must be >= 0";
     return false;
@@ -358,72 +362,113 @@ std::vector<std::string> ExcludedEffects(const std::vector<RemovedEffect>& remov
   return excluded;
 }
 
-DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLog>& logs,
-                         const std::vector<EstimationLog>& held_out,
-                         const DiscoveryOptions& options) {
-  const auto start = DiscoveryClock::now();
-  std::string why;
-  if (!options.IsValid(&why)) throw InputError("discover options: " + why);
-  if (logs.empty()) throw InputError("discover: no estimation log");
-  DiscoveryResult out;
-  out.estimation = AtFitRate(logs, options.fit_rate_hz);
-  out.validation = AtFitRate(held_out, options.fit_rate_hz);
-  std::vector<EstimationLog> estimation, validation;  // what every step below fits and judges
-  for (const LogAtFitRate& a : out.estimation) {
-    estimation.push_back(a.log);
-    if (a.log.kind == LogKind::kFlight) Say(options, "discover: " + a.note);
+namespace {
+
+// The steps of the loop, as discovery.json's seconds_by_step names them.
+constexpr const char* kEkfStart = "EKF start";
+constexpr const char* kDeclaredFit = "declared fit";
+constexpr const char* kWindowModelFit = "the search window's model fitted to the whole logs";
+constexpr const char* kContinued = "fits continued past their iteration cap";
+constexpr const char* kRestarts = "restarts off the bounds";
+constexpr const char* kSnapshots = "fit and held-out errors, residual tests";
+constexpr const char* kSensitivities = "candidate sensitivities";
+constexpr const char* kScores = "candidate scores";
+constexpr const char* kRefits = "candidate refits";
+constexpr const char* kJudgedAgain = "added effects judged again";
+constexpr const char* kUnexplained = "unexplained channels, generic dictionary";
+
+// Runs step() and adds its wall time to `name` (DiscoveryResult::seconds_by_step).
+template <class Step>
+auto Timed(DiscoveryResult* out, const char* name, Step&& step) {
+  const auto t0 = DiscoveryClock::now();
+  if constexpr (std::is_void_v<decltype(step())>) {
+    step();
+    AddStepSeconds(name, SecondsSince(t0), &out->seconds_by_step);
+  } else {
+    auto result = step();
+    AddStepSeconds(name, SecondsSince(t0), &out->seconds_by_step);
+    return result;
   }
-  for (const LogAtFitRate& a : out.validation) {
-    validation.push_back(a.log);
-    if (a.log.kind == LogKind::kFlight) Say(options, "discover: held out " + a.note);
-  }
-  // Runs step() and adds its wall time to `name` (DiscoveryResult::seconds_by_step).
-  auto timed = [&out](const char* name, auto&& step) {
-    const auto t0 = DiscoveryClock::now();
-    if constexpr (std::is_void_v<decltype(step())>) {
-      step();
-      AddStepSeconds(name, SecondsSince(t0), &out.seconds_by_step);
-    } else {
-      auto result = step();
-      AddStepSeconds(name, SecondsSince(t0), &out.seconds_by_step);
-      return result;
-    }
-  };
-  constexpr const char* kEkfStart = "EKF start";
-  constexpr const char* kDeclaredFit = "declared fit";
-  constexpr const char* kContinued = "fits continued past their iteration cap";
-  constexpr const char* kRestarts = "restarts off the bounds";
-  constexpr const char* kSnapshots = "fit and held-out errors, residual tests";
-  constexpr const char* kSensitivities = "candidate sensitivities";
-  constexpr const char* kScores = "candidate scores";
-  constexpr const char* kRefits = "candidate refits";
-  constexpr const char* kJudgedAgain = "added effects judged again";
-  constexpr const char* kUnexplained = "unexplained channels, generic dictionary";
+}
+
+// What the loop carries from round to round: the current model, fitted, its
+// candidates' sensitivities along that fit, and how well it fits.
+struct LoopState {
+  CandidatePass pass;
+  ModelSnapshot now;
+};
+
+// The loop's options: `options` with its fits capped (fit_function_tolerance,
+// fit_max_iterations, at most one noise relaxation).
+DiscoveryOptions LoopOptions(const DiscoveryOptions& options) {
   DiscoveryOptions o = options;
   o.fit.function_tolerance = std::max(o.fit.function_tolerance, o.fit_function_tolerance);
   o.fit.max_iterations = std::min(o.fit.max_iterations, o.fit_max_iterations);
   o.fit.noise_relaxations = std::min(o.fit.noise_relaxations, 1);
+  return o;
+}
 
+// The fit `model` ends with: continued past its iteration cap (Converged),
+// then restarted off the bounds it leaves (RestartedOffBounds), the restart's
+// note appended to *start_note if one is kept.
+OutputErrorResult Settled(const Vehicle& model, const Vehicle& declared, OutputErrorResult fit,
+                          const std::vector<EstimationLog>& logs, const DiscoveryOptions& o,
+                          const DiscoveryOptions& options, DiscoveryResult* out,
+                          std::string* start_note) {
+  fit = Timed(out, kContinued,
+              [&] { return Converged(model, std::move(fit), logs, o.fit, options); });
+  std::string restart_note;
+  fit = Timed(out, kRestarts, [&] {
+    return RestartedOffBounds(model, declared, std::move(fit), logs, o.fit, options, &restart_note);
+  });
+  if (!restart_note.empty() && start_note != nullptr) *start_note += "; " + restart_note;
+  return fit;
+}
+
+// Step 1: the declared model fitted to `logs`, from a short EKF pass (or
+// the config's values), settled; out->start says how it was started.
+// `warm` (nullptr: none) is a declared fit of part of these logs (the search
+// window's, started as `warm_start` says): the fit then starts from its
+// values at the final segment length, and from the EKF pass only if that
+// fails. Throws ComputationError if no fit is usable. May hold the scale in
+// the solve (o->fit).
+OutputErrorResult FitDeclared(const Vehicle& declared, const std::vector<EstimationLog>& logs,
+                              const OutputErrorResult* warm, const std::string& warm_start,
+                              const DiscoveryOptions& options, DiscoveryOptions* o,
+                              DiscoveryResult* out) {
   Vehicle start_vehicle = declared;
-  OutputErrorOptions declared_fit = o.fit;
-  out.start = "starting values from the config";
+  OutputErrorOptions declared_fit = o->fit;
+  Say(options, "discover: fitting the declared model (" +
+                   std::to_string(declared.parameters.FreeIndices().size()) + " free parameters)" +
+                   (warm != nullptr ? " from its fit on the search window" : ""));
+  OutputErrorResult fit;
+  if (warm != nullptr) {
+    start_vehicle.parameters = warm->parameters;
+    declared_fit.segment_schedule_s = {o->fit.segment_schedule_s.back()};
+    if (warm->scale_held_in_solve) declared_fit.scale_free_in_solve = false;
+    out->start = "from the declared fit on the search window (" + warm_start + ")";
+    fit = Timed(out, kDeclaredFit, [&] { return FitOutputError(start_vehicle, logs, declared_fit); });
+    if (fit.usable) return Settled(declared, declared, std::move(fit), logs, *o, options, out, &out->start);
+    Say(options, "discover: the fit from the search window's failed (" + fit.why_not_usable +
+                     "); fitting from the start the loop takes without a window");
+    start_vehicle = declared;
+    declared_fit = o->fit;
+  }
+  out->start = "starting values from the config";
   bool from_ekf = false;
   if (options.ekf_start) {  // not usable without a flight log: the config start
-    const EkfStart ekf = timed(kEkfStart, [&] { return StartFromEkfPass(declared, estimation); });
+    const EkfStart ekf = Timed(out, kEkfStart, [&] { return StartFromEkfPass(declared, logs); });
     Say(options, "discover: " + ekf.note);
     if (ekf.usable) {
       start_vehicle.parameters = ekf.parameters;
       from_ekf = true;
-      declared_fit.segment_schedule_s = {o.fit.segment_schedule_s.back()};
-      out.start = ekf.note;
+      declared_fit.segment_schedule_s = {o->fit.segment_schedule_s.back()};
+      out->start = ekf.note;
     } else {
-      out.start = ekf.note + "; starting values from the config";
+      out->start = ekf.note + "; starting values from the config";
     }
   }
-  Say(options, "discover: fitting the declared model (" +
-                   std::to_string(declared.parameters.FreeIndices().size()) + " free parameters)");
-  OutputErrorResult fit =
-      timed(kDeclaredFit, [&] { return FitOutputError(start_vehicle, estimation, declared_fit); });
+  fit = Timed(out, kDeclaredFit, [&] { return FitOutputError(start_vehicle, logs, declared_fit); });
   if (!fit.usable && !fit.scale_move_failed && from_ekf) {
     // The EKF's values can start the fit where the model cannot be integrated
     // (measured: seed 11183 of the controllers' study, a swashplate bias,
@@ -431,11 +476,10 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     // config's values and the coarse-to-fine schedule are the start without it.
     Say(options, "discover: the fit from the EKF start failed (" + fit.why_not_usable +
                      "); fitting from the config's values");
-    out.start += "; its fit failed: starting values from the config";
+    out->start += "; its fit failed: starting values from the config";
     start_vehicle = declared;
-    declared_fit.segment_schedule_s = o.fit.segment_schedule_s;
-    fit = timed(kDeclaredFit,
-                [&] { return FitOutputError(start_vehicle, estimation, declared_fit); });
+    declared_fit.segment_schedule_s = o->fit.segment_schedule_s;
+    fit = Timed(out, kDeclaredFit, [&] { return FitOutputError(start_vehicle, logs, declared_fit); });
   }
   if (!fit.usable && fit.scale_move_failed) {
     // The declared model needs a scale member beyond its bounds (e.g. the
@@ -444,27 +488,28 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     // its bound and the candidates' refits can move it back.
     Say(options, "discover: " + fit.why_not_usable +
                      "; refitting with the scale held in the solve (a symptom of a missing effect)");
-    o.fit.scale_free_in_solve = false;
+    o->fit.scale_free_in_solve = false;
     declared_fit.scale_free_in_solve = false;
-    fit = timed(kDeclaredFit,
-                [&] { return FitOutputError(start_vehicle, estimation, declared_fit); });
+    fit = Timed(out, kDeclaredFit, [&] { return FitOutputError(start_vehicle, logs, declared_fit); });
   }
   if (!fit.usable) throw ComputationError("the declared model's fit failed: " + fit.why_not_usable);
-  fit = timed(kContinued,
-              [&] { return Converged(declared, std::move(fit), estimation, o.fit, options); });
-  std::string restart_note;
-  fit = timed(kRestarts, [&] {
-    return RestartedOffBounds(declared, declared, std::move(fit), estimation, o.fit, options,
-                              &restart_note);
-  });
-  if (!restart_note.empty()) out.start += "; " + restart_note;
+  return Settled(declared, declared, std::move(fit), logs, *o, options, out, &out->start);
+}
+
+// The declared fit as the baseline (out->baseline) and its symptoms (step
+// 7: parameters at a bound or far outside their range).
+void SetBaseline(const Vehicle& declared, const OutputErrorResult& fit,
+                 const std::vector<EstimationLog>& estimation,
+                 const std::vector<EstimationLog>& validation, const DiscoveryOptions& options,
+                 DiscoveryResult* out) {
   Vehicle current = declared;
   current.parameters = fit.parameters;
-  out.baseline =
-      timed(kSnapshots, [&] { return Snapshot(current, fit, estimation, validation, options); });
+  out->baseline = Timed(out, kSnapshots,
+                        [&] { return Snapshot(current, fit, estimation, validation, options); });
   const std::vector<PlausibilityFinding> far =
       FarOutsidePhysicalRange(fit.parameters, declared.parameters);
   const std::vector<std::string> at_bounds = ParametersAtBounds(fit.parameters);
+  out->symptoms.clear();
   for (const std::string& name : SymptomaticParameters(fit.parameters, declared.parameters)) {
     ParameterSymptom b;
     const Parameter& p = fit.parameters.Get(name);
@@ -480,27 +525,47 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
       b.why_outside = f.text;
     }
     b.channels = ChannelsReachedBy(current, {name}, estimation, fit.noise);
-    out.symptoms.push_back(b);
+    out->symptoms.push_back(b);
   }
+}
 
-  CandidatePass pass =
-      timed(kSensitivities, [&] { return LinearisePass(current, fit, estimation, o.fit); });
-  ModelSnapshot now = out.baseline;
-  Say(options, "discover: sensitivities of " + std::to_string(pass.candidates.size()) +
-                   " candidate effects along the fit: " + NumberText(pass.seconds, "%.1f s"));
-  int last_change_round = 0;  // the latest round whose addition stayed in the model
-  for (int round = 1; round <= options.max_added + 1; ++round) {
+// The loop's state at the baseline.
+LoopState AtBaseline(const std::vector<EstimationLog>& estimation, const DiscoveryOptions& o,
+                     const DiscoveryOptions& options, DiscoveryResult* out) {
+  LoopState s;
+  s.now = out->baseline;
+  s.pass = Timed(out, kSensitivities, [&] {
+    return LinearisePass(s.now.vehicle, s.now.result, estimation, o.fit);
+  });
+  Say(options, "discover: sensitivities of " + std::to_string(s.pass.candidates.size()) +
+                   " candidate effects along the fit: " + NumberText(s.pass.seconds, "%.1f s"));
+  return s;
+}
+
+// Steps 2-6, round after round from `first_round` until a round adds
+// nothing (or max_added are added): score the candidates against the
+// current model, refit the shortlisted ones, add the best that qualifies,
+// judge the added effects again. Returns the last round.
+int Rounds(const Vehicle& declared, int first_round, int last_change_round,
+           const std::vector<EstimationLog>& estimation,
+           const std::vector<EstimationLog>& validation, const DiscoveryOptions& o,
+           const DiscoveryOptions& options, DiscoveryClock::time_point start, LoopState* state,
+           DiscoveryResult* out) {
+  CandidatePass& pass = state->pass;
+  ModelSnapshot& now = state->now;
+  int round = first_round;
+  for (;; ++round) {
     Say(options, "discover: round " + std::to_string(round) + ": scoring candidates against " +
-                     (out.added.empty() ? std::string("the declared model")
-                                        : "the model with " + std::to_string(out.added.size()) +
-                                              " added effect(s)"));
+                     (out->added.empty() ? std::string("the declared model")
+                                         : "the model with " + std::to_string(out->added.size()) +
+                                               " added effect(s)"));
     std::vector<CandidateScore> scores =
-        timed(kScores, [&] { return ScoreRound(pass, now, estimation, o, round); });
+        Timed(out, kScores, [&] { return ScoreRound(pass, now, estimation, o, round); });
     std::vector<CandidateScore> beside;  // a paired refit's, reported after the round's
     bool accepted = false;
-    if (static_cast<int>(out.added.size()) < options.max_added) {
-      const std::vector<std::string> removed = ExcludedEffects(out.removed, last_change_round);
-      RoundRefits refits = timed(kRefits, [&] {
+    if (static_cast<int>(out->added.size()) < options.max_added) {
+      const std::vector<std::string> removed = ExcludedEffects(out->removed, last_change_round);
+      RoundRefits refits = Timed(out, kRefits, [&] {
         return RefitShortlisted(pass, now, declared, removed, estimation, validation, &scores, o,
                                 start);
       });
@@ -510,26 +575,26 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         pass = std::move(refit.next);
         now = std::move(refit.snapshot);
         if (pass.fit.hit_iteration_limit) {
-          const OutputErrorResult fit = timed(kContinued, [&] {
+          const OutputErrorResult fit = Timed(out, kContinued, [&] {
             return Converged(pass.fitted, pass.fit, estimation, o.fit, options);
           });
           Vehicle v = pass.fitted;
           v.parameters = fit.parameters;
-          pass = timed(kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
-          now =
-              timed(kSnapshots, [&] { return Snapshot(v, fit, estimation, validation, options); });
+          pass = Timed(out, kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
+          now = Timed(out, kSnapshots,
+                      [&] { return Snapshot(v, fit, estimation, validation, options); });
         }
         std::string restart_note;
-        OutputErrorResult restarted = timed(kRestarts, [&] {
+        OutputErrorResult restarted = Timed(out, kRestarts, [&] {
           return RestartedOffBounds(pass.fitted, declared, pass.fit, estimation, o.fit, options,
                                     &restart_note);
         });
         if (!restart_note.empty()) {
           Vehicle v = pass.fitted;
           v.parameters = restarted.parameters;
-          pass =
-              timed(kSensitivities, [&] { return LinearisePass(v, restarted, estimation, o.fit); });
-          now = timed(kSnapshots,
+          pass = Timed(out, kSensitivities,
+                       [&] { return LinearisePass(v, restarted, estimation, o.fit); });
+          now = Timed(out, kSnapshots,
                       [&] { return Snapshot(v, restarted, estimation, validation, options); });
         }
       };
@@ -538,20 +603,21 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         const CandidateScore& s = scores[refits.shortlist[best]];
         Say(options, "discover: added " + s.effect + " (Wald p = " +
                          NumberText(s.wald_p_value, "%.3g") + ", removes " +
-                         NumberText(100 * s.share_of_excess, "%.0f") + " % of its channels' excess error)");
+                         NumberText(100 * s.share_of_excess, "%.0f") +
+                         " % of its channels' excess error)");
         adopt(std::move(refits.refits[best]));
-        out.added.push_back(s.effect);
+        out->added.push_back(s.effect);
         accepted = true;
-      } else if (static_cast<int>(out.added.size()) + 2 <= options.max_added) {
-        PairedRefit pair = timed(kRefits, [&] {
+      } else if (static_cast<int>(out->added.size()) + 2 <= options.max_added) {
+        PairedRefit pair = Timed(out, kRefits, [&] {
           return RefitBesideABound(pass, now, refits, &scores, declared, removed, estimation,
                                    validation, o, round, start);
         });
         beside = std::move(pair.beside);
         if (pair.added || pair.second_alone) {
           adopt(std::move(pair.joint));
-          if (pair.added) out.added.push_back(pair.first);
-          out.added.push_back(pair.second);
+          if (pair.added) out->added.push_back(pair.first);
+          out->added.push_back(pair.second);
           accepted = true;
         }
       }
@@ -563,26 +629,109 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         // with swashplate_bias added in round 2, without wind the rest lost
         // 0.2 % of wind's channels' excess and without cg_offset 0.0 %;
         // cg_offset was taken out and wind, judged once, stayed).
-        const std::string latest = out.added.back();
-        timed(kJudgedAgain, [&] {
-          while (DropRedundantEffect(estimation, validation, o, round, &pass, &now, &out) &&
-                 std::find(out.added.begin(), out.added.end(), latest) != out.added.end()) {
+        const std::string latest = out->added.back();
+        Timed(out, kJudgedAgain, [&] {
+          while (DropRedundantEffect(estimation, validation, o, round, &pass, &now, out) &&
+                 std::find(out->added.begin(), out->added.end(), latest) != out->added.end()) {
           }
         });
-        if (std::find(out.added.begin(), out.added.end(), latest) != out.added.end()) {
+        if (std::find(out->added.begin(), out->added.end(), latest) != out->added.end()) {
           last_change_round = round;
         }
       }
     }
-    out.candidates.insert(out.candidates.end(), scores.begin(), scores.end());
-    out.candidates.insert(out.candidates.end(), beside.begin(), beside.end());
-    if (!accepted) break;
+    out->candidates.insert(out->candidates.end(), scores.begin(), scores.end());
+    out->candidates.insert(out->candidates.end(), beside.begin(), beside.end());
+    if (!accepted) return round;
   }
-  current = pass.fitted;
-  out.final = std::move(now);
+}
+
+// The estimation logs as the search window takes them: each flight log
+// longer than twice search_window_s cut to its first search_window_s, the
+// others whole. Empty if no log is cut (the loop then searches the whole
+// logs).
+std::vector<EstimationLog> SearchWindowLogs(const std::vector<EstimationLog>& estimation,
+                                            double search_window_s,
+                                            std::vector<std::string>* cut) {
+  if (!(search_window_s > 0)) return {};
+  std::vector<EstimationLog> window;
+  for (const EstimationLog& log : estimation) {
+    const std::vector<double>& t = log.inputs.times();
+    if (log.kind == LogKind::kFlight && t.back() - t.front() > 2 * search_window_s) {
+      window.push_back(FirstSecondsOf(log, search_window_s));
+      cut->push_back(log.source);
+    } else {
+      window.push_back(log);
+    }
+  }
+  if (cut->empty()) return {};
+  return window;
+}
+
+// The search on the window (`window`, the held-out logs whole): the declared
+// fit and every round, into *w. False (and *why) if it failed: a fit of the
+// window may be a model that cannot be simulated on the held-out logs.
+bool SearchWindow(const Vehicle& declared, const std::vector<EstimationLog>& window,
+                  const std::vector<EstimationLog>& validation, const DiscoveryOptions& options,
+                  DiscoveryOptions* o, DiscoveryClock::time_point start, DiscoveryResult* w,
+                  OutputErrorResult* declared_fit, int* rounds, std::string* why) {
+  try {
+    *declared_fit = FitDeclared(declared, window, nullptr, "", options, o, w);
+    SetBaseline(declared, *declared_fit, window, validation, options, w);
+    LoopState state = AtBaseline(window, *o, options, w);
+    *rounds = Rounds(declared, 1, 0, window, validation, *o, options, start, &state, w);
+    w->final = std::move(state.now);
+    return true;
+  } catch (const ComputationError& e) {
+    *why = e.what();
+    return false;
+  }
+}
+
+// The model the search window ended with, fitted to the whole logs from its
+// values at the final segment length and settled; its effects judged again
+// there (DropRedundantEffect: one that removes too little of its channels'
+// excess on the whole logs leaves the model, `round` its removal's round).
+// False if that model's fit fails.
+bool ConfirmOnWholeLogs(const Vehicle& declared, const ModelSnapshot& window_final,
+                        const std::vector<EstimationLog>& estimation,
+                        const std::vector<EstimationLog>& validation, int round,
+                        const DiscoveryOptions& o, const DiscoveryOptions& options,
+                        LoopState* state, DiscoveryResult* out) {
+  const Vehicle& model = window_final.vehicle;
+  OutputErrorOptions fit_options = o.fit;
+  fit_options.segment_schedule_s = {o.fit.segment_schedule_s.back()};
+  if (window_final.result.scale_held_in_solve) fit_options.scale_free_in_solve = false;
+  Say(options, "discover: the search window's model (with " + Joined(out->added, ", ") +
+                   ") fitted to the whole logs");
+  OutputErrorResult fit =
+      Timed(out, kWindowModelFit, [&] { return FitOutputError(model, estimation, fit_options); });
+  if (!fit.usable) {
+    Say(options, "discover: that fit failed: " + fit.why_not_usable);
+    return false;
+  }
+  fit = Settled(model, declared, std::move(fit), estimation, o, options, out, nullptr);
+  Vehicle v = model;
+  v.parameters = fit.parameters;
+  state->pass = Timed(out, kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
+  state->now =
+      Timed(out, kSnapshots, [&] { return Snapshot(v, fit, estimation, validation, options); });
+  Timed(out, kJudgedAgain, [&] {
+    while (!out->added.empty() &&
+           DropRedundantEffect(estimation, validation, o, round, &state->pass, &state->now, out)) {
+    }
+  });
+  return true;
+}
+
+// Steps 7 and the report's end: the final model, what became of the
+// declared fit's symptoms, and the channels left unexplained.
+void Conclude(const Vehicle& declared, const std::vector<EstimationLog>& estimation,
+              const DiscoveryOptions& options, LoopState* state, DiscoveryResult* out) {
+  out->final = std::move(state->now);
   const std::vector<std::string> still =
-      SymptomaticParameters(out.final.result.parameters, declared.parameters);
-  for (ParameterSymptom& b : out.symptoms) {
+      SymptomaticParameters(out->final.result.parameters, declared.parameters);
+  for (ParameterSymptom& b : out->symptoms) {
     b.released = std::find(still.begin(), still.end(), b.parameter) == still.end();
     std::string channels;
     for (const std::string& c : b.channels) channels += (channels.empty() ? "" : ", ") + c;
@@ -593,7 +742,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                  : "a value far outside its physical range: " + b.why_outside;
     b.text = "the declared fit left " + b.parameter + " at " + where +
              ": a symptom of a missing effect; it distorts " + (channels.empty() ? "no channel" : channels) +
-             (out.added.empty() ? std::string()
+             (out->added.empty() ? std::string()
               : b.released      ? (at_bound ? "; the final model moved it back inside its bounds"
                                             : "; the final model moved it back towards its physical range")
                                 : (at_bound ? "; it stays at the bound in the final model"
@@ -601,7 +750,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     Say(options, "discover: " + b.text);
   }
 
-  for (const ChannelResidualTest& t : out.final.residual_tests) {
+  for (const ChannelResidualTest& t : out->final.residual_tests) {
     // Structured: autocorrelated (Ljung-Box, which removes the mean), or
     // offset by more than its noise; and well above its noise either way.
     const bool structured = t.ljung_box_p < options.alpha || std::fabs(t.mean) > t.noise_std;
@@ -623,12 +772,105 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
                   t.ljung_box_p, t.mean, t.rms, t.noise_std > 0 ? t.rms / t.noise_std : INFINITY,
                   t.noise_std, u.correlates_with.c_str(), u.correlation);
     u.why = text;
-    u.generic = timed(kUnexplained, [&] {
-      return SearchChannelDictionary(estimation, out.final.result.predictions, t.channel,
+    u.generic = Timed(out, kUnexplained, [&] {
+      return SearchChannelDictionary(estimation, out->final.result.predictions, t.channel,
                                      options.dictionary);
     });
-    out.unexplained.push_back(u);
+    out->unexplained.push_back(u);
   }
+}
+
+}  // namespace
+
+DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLog>& logs,
+                         const std::vector<EstimationLog>& held_out,
+                         const DiscoveryOptions& options) {
+  const auto start = DiscoveryClock::now();
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("discover options: " + why);
+  if (logs.empty()) throw InputError("discover: no estimation log");
+  DiscoveryResult out;
+  out.estimation = AtFitRate(logs, options.fit_rate_hz);
+  out.validation = AtFitRate(held_out, options.fit_rate_hz);
+  std::vector<EstimationLog> estimation, validation;  // what every step below fits and judges
+  for (const LogAtFitRate& a : out.estimation) {
+    estimation.push_back(a.log);
+    if (a.log.kind == LogKind::kFlight) Say(options, "discover: " + a.note);
+  }
+  for (const LogAtFitRate& a : out.validation) {
+    validation.push_back(a.log);
+    if (a.log.kind == LogKind::kFlight) Say(options, "discover: held out " + a.note);
+  }
+  DiscoveryOptions o = LoopOptions(options);
+
+  // The search on a window of the long flight logs, confirmed on the whole
+  // logs (DiscoveryOptions::search_window_s).
+  LoopState state;
+  bool have_baseline = false;
+  int first_round = 1, last_change_round = 0;
+  std::vector<std::string> cut;
+  const std::vector<EstimationLog> window =
+      SearchWindowLogs(estimation, options.search_window_s, &cut);
+  if (!window.empty()) {
+    out.search_window.logs = cut;
+    out.search_window.seconds = options.search_window_s;
+    Say(options, "discover: searching the first " + NumberText(options.search_window_s, "%g s") +
+                     " of " + Joined(cut, ", ") + ", then confirming on the whole logs");
+    DiscoveryResult w;
+    DiscoveryOptions window_o = o;
+    OutputErrorResult window_declared;
+    int rounds = 0;
+    std::string failed;
+    const bool searched = SearchWindow(declared, window, validation, options, &window_o, start, &w,
+                                       &window_declared, &rounds, &failed);
+    for (const auto& [step, seconds] : w.seconds_by_step) {
+      AddStepSeconds(step, seconds, &out.seconds_by_step);
+    }
+    if (!searched) {
+      out.search_window.note = "the search on the window failed (" + failed + ")";
+      Say(options, "discover: " + out.search_window.note + ": searching the whole logs");
+    } else {
+      Say(options, "discover: the search on the window ended after round " +
+                       std::to_string(rounds) + " (" + NumberText(SecondsSince(start), "%.1f s") +
+                       " so far), having added " +
+                       (w.added.empty() ? std::string("nothing") : Joined(w.added, ", ")) +
+                       ": the whole logs now");
+      o = window_o;  // with the scale held in the solve if the window's fit needed it
+      out.search_window.rounds = rounds;
+      out.search_window.added = w.added;
+      out.search_window.start = w.start;
+      const OutputErrorResult declared_fit =
+          FitDeclared(declared, estimation, &window_declared, w.start, options, &o, &out);
+      SetBaseline(declared, declared_fit, estimation, validation, options, &out);
+      have_baseline = true;
+      out.added = w.added;
+      out.candidates = std::move(w.candidates);
+      out.removed = std::move(w.removed);
+      bool confirmed = true;
+      if (w.added.empty()) {
+        state = AtBaseline(estimation, o, options, &out);
+      } else if (!ConfirmOnWholeLogs(declared, w.final, estimation, validation, rounds + 1, o,
+                                     options, &state, &out)) {
+        confirmed = false;
+        out.search_window.note = "the window's model could not be fitted to the whole logs";
+        Say(options, "discover: " + out.search_window.note + ": searching the whole logs");
+        out.added.clear();
+        out.candidates.clear();
+        out.removed.clear();
+        state = AtBaseline(estimation, o, options, &out);
+      }
+      out.search_window.used = confirmed;
+      if (confirmed) first_round = last_change_round = rounds + 1;
+    }
+  }
+  if (!have_baseline) {  // no window, or its search failed
+    const OutputErrorResult fit = FitDeclared(declared, estimation, nullptr, "", options, &o, &out);
+    SetBaseline(declared, fit, estimation, validation, options, &out);
+    state = AtBaseline(estimation, o, options, &out);
+  }
+  Rounds(declared, first_round, last_change_round, estimation, validation, o, options, start,
+         &state, &out);
+  Conclude(declared, estimation, options, &state, &out);
   out.seconds = SecondsSince(start);
   std::vector<std::string> steps;  // those that round to 0.1 s or more
   for (const auto& [step, seconds] : out.seconds_by_step) {
@@ -697,7 +939,18 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
                              {"note", a.note}});
     }
   }
+  const DiscoveryResult::SearchWindow& w = r.search_window;
+  const nlohmann::json search_window =
+      w.logs.empty() ? nlohmann::json()
+                     : nlohmann::json{{"seconds", w.seconds},
+                                      {"logs", w.logs},
+                                      {"used", w.used},
+                                      {"rounds", w.rounds},
+                                      {"added", w.added},
+                                      {"start", w.start},
+                                      {"note", w.note}};
   return {{"fitted_logs", fitted_logs},
+          {"search_window", search_window},
           {"baseline", SnapshotJson(r.baseline, has_validation)},
           {"start", r.start},
           {"symptoms", symptoms},
@@ -757,6 +1010,7 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
             {"max_refits", options.max_refits},
             {"decisive_share_of_all_excess", options.decisive_share_of_all_excess},
             {"restart_min_gain", options.restart_min_gain},
+            {"search_window_s", options.search_window_s},
             {"whiteness_test", "Ljung-Box, chi-square p-value by the regularized incomplete gamma"},
             {"ljung_box_lags", options.residuals.lags},
             {"unexplained_rms_ratio", options.unexplained_rms_ratio},
