@@ -25,7 +25,8 @@
 # 21300-21379, 21380-21459, 21460-21539, 21540-21619, 21620-21699,
 # 21700-21779, 21780-21859, 21860-21939, 21940-22019, 22020-22099,
 # 22100-22179, 22180-22259, 22260-22339, 22340-22419, 22420-22499,
-# 22580-22659 are taken; of discover_controllers.yaml, 22500-22579).
+# 22580-22659, 22660-22739 are taken; of discover_controllers.yaml,
+# 22500-22579, 22740-22819).
 # Run on an idle machine: the numbers are wall times. Needs bc and python3.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"

@@ -409,14 +409,16 @@ DiscoveryOptions LoopOptions(const DiscoveryOptions& options) {
 }
 
 // The fit `model` ends with: continued past its iteration cap (Converged),
-// then restarted off the bounds it leaves (RestartedOffBounds), the restart's
-// note appended to *start_note if one is kept.
+// then, if restart_off_bounds, restarted off the bounds it leaves
+// (RestartedOffBounds), the restart's note appended to *start_note if one
+// is kept.
 OutputErrorResult Settled(const Vehicle& model, const Vehicle& declared, OutputErrorResult fit,
                           const std::vector<EstimationLog>& logs, const DiscoveryOptions& o,
                           const DiscoveryOptions& options, DiscoveryResult* out,
-                          std::string* start_note) {
+                          std::string* start_note, bool restart_off_bounds = true) {
   fit = Timed(out, kContinued,
               [&] { return Converged(model, std::move(fit), logs, o.fit, options); });
+  if (!restart_off_bounds) return fit;
   std::string restart_note;
   fit = Timed(out, kRestarts, [&] {
     return RestartedOffBounds(model, declared, std::move(fit), logs, o.fit, options, &restart_note);
@@ -429,13 +431,14 @@ OutputErrorResult Settled(const Vehicle& model, const Vehicle& declared, OutputE
 // the config's values), settled; out->start says how it was started.
 // `warm` (nullptr: none) is a declared fit of part of these logs (the search
 // window's, started as `warm_start` says): the fit then starts from its
-// values at the final segment length, and from the EKF pass only if that
-// fails. Throws ComputationError if no fit is usable. May hold the scale in
-// the solve (o->fit).
+// values at the final segment length (restarted off its bounds only if
+// restart_warm_fit), and from the EKF pass only if that fails. Throws
+// ComputationError if no fit is usable. May hold the scale in the solve
+// (o->fit).
 OutputErrorResult FitDeclared(const Vehicle& declared, const std::vector<EstimationLog>& logs,
                               const OutputErrorResult* warm, const std::string& warm_start,
-                              const DiscoveryOptions& options, DiscoveryOptions* o,
-                              DiscoveryResult* out) {
+                              bool restart_warm_fit, const DiscoveryOptions& options,
+                              DiscoveryOptions* o, DiscoveryResult* out) {
   Vehicle start_vehicle = declared;
   OutputErrorOptions declared_fit = o->fit;
   Say(options, "discover: fitting the declared model (" +
@@ -448,7 +451,10 @@ OutputErrorResult FitDeclared(const Vehicle& declared, const std::vector<Estimat
     if (warm->scale_held_in_solve) declared_fit.scale_free_in_solve = false;
     out->start = "from the declared fit on the search window (" + warm_start + ")";
     fit = Timed(out, kDeclaredFit, [&] { return FitOutputError(start_vehicle, logs, declared_fit); });
-    if (fit.usable) return Settled(declared, declared, std::move(fit), logs, *o, options, out, &out->start);
+    if (fit.usable) {
+      return Settled(declared, declared, std::move(fit), logs, *o, options, out, &out->start,
+                     restart_warm_fit);
+    }
     Say(options, "discover: the fit from the search window's failed (" + fit.why_not_usable +
                      "); fitting from the start the loop takes without a window");
     start_vehicle = declared;
@@ -676,7 +682,7 @@ bool SearchWindow(const Vehicle& declared, const std::vector<EstimationLog>& win
                   DiscoveryOptions* o, DiscoveryClock::time_point start, DiscoveryResult* w,
                   OutputErrorResult* declared_fit, int* rounds, std::string* why) {
   try {
-    *declared_fit = FitDeclared(declared, window, nullptr, "", options, o, w);
+    *declared_fit = FitDeclared(declared, window, nullptr, "", true, options, o, w);
     SetBaseline(declared, *declared_fit, window, validation, options, w);
     LoopState state = AtBaseline(window, *o, options, w);
     *rounds = Rounds(declared, 1, 0, window, validation, *o, options, start, &state, w);
@@ -692,7 +698,8 @@ bool SearchWindow(const Vehicle& declared, const std::vector<EstimationLog>& win
 // values at the final segment length and settled; its effects judged again
 // there (DropRedundantEffect: one that removes too little of its channels'
 // excess on the whole logs leaves the model, `round` its removal's round).
-// False if that model's fit fails.
+// False if that model's fit fails, or the fit cannot be simulated on the
+// held-out logs.
 bool ConfirmOnWholeLogs(const Vehicle& declared, const ModelSnapshot& window_final,
                         const std::vector<EstimationLog>& estimation,
                         const std::vector<EstimationLog>& validation, int round,
@@ -714,8 +721,14 @@ bool ConfirmOnWholeLogs(const Vehicle& declared, const ModelSnapshot& window_fin
   Vehicle v = model;
   v.parameters = fit.parameters;
   state->pass = Timed(out, kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
-  state->now =
-      Timed(out, kSnapshots, [&] { return Snapshot(v, fit, estimation, validation, options); });
+  const std::string failed = Timed(out, kSnapshots, [&] {
+    state->now = Snapshot(v, fit, estimation, {}, options);
+    return TryAddValidation(validation, options, &state->now);
+  });
+  if (!failed.empty()) {
+    Say(options, "discover: that model fails on the held-out data: " + failed);
+    return false;
+  }
   Timed(out, kJudgedAgain, [&] {
     while (!out->added.empty() &&
            DropRedundantEffect(estimation, validation, o, round, &state->pass, &state->now, out)) {
@@ -839,8 +852,14 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
       out.search_window.rounds = rounds;
       out.search_window.added = w.added;
       out.search_window.start = w.start;
-      const OutputErrorResult declared_fit =
-          FitDeclared(declared, estimation, &window_declared, w.start, options, &o, &out);
+      // Where the window added effects, the rounds go on from its model and
+      // the declared fit is the report's baseline alone: it starts in the
+      // basin the window's declared fit chose, and is not restarted off its
+      // bounds again (measured, 22469 of the confusion spec: restarting it
+      // took five fits of the 60 s log and 5.4 s of the run's 28.2 s, for 2.4 %
+      // of the baseline's weighted RSS).
+      const OutputErrorResult declared_fit = FitDeclared(
+          declared, estimation, &window_declared, w.start, w.added.empty(), options, &o, &out);
       SetBaseline(declared, declared_fit, estimation, validation, options, &out);
       have_baseline = true;
       out.added = w.added;
@@ -864,7 +883,7 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     }
   }
   if (!have_baseline) {  // no window, or its search failed
-    const OutputErrorResult fit = FitDeclared(declared, estimation, nullptr, "", options, &o, &out);
+    const OutputErrorResult fit = FitDeclared(declared, estimation, nullptr, "", true, options, &o, &out);
     SetBaseline(declared, fit, estimation, validation, options, &out);
     state = AtBaseline(estimation, o, options, &out);
   }
