@@ -57,10 +57,10 @@ class DiscoverOnADraw : public CliTestDir {
     std::string logs = simulate(draw.scenarios.at(0), prefix + "flight.csv");
     if (draw.scenarios.size() == 2) logs += "," + simulate(draw.scenarios.at(1), prefix + "balance.csv");
     const std::string held_out = simulate(draw.held_out, prefix + "held_out.csv");
-    const RunResult run = RunCoaxid("discover --config=" + config_ + " --logs=" + logs +
-                                    " --validate=" + held_out +
-                                    " --noise_relaxations=1 --out=" + Path(prefix + "out") +
-                                    (flags.empty() ? "" : " " + flags));
+    const RunResult run =
+        RunCoaxid("discover --config=" + config_ + " --logs=" + logs + " --validate=" + held_out +
+                  " --noise_relaxations=1 --out=" + Path(prefix + "out") +
+                  (flags.empty() ? "" : " " + flags));
     if (run.status != 0) {
       ADD_FAILURE() << run.output;
       return nullptr;

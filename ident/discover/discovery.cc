@@ -444,13 +444,17 @@ OutputErrorResult FitDeclared(const Vehicle& declared, const std::vector<Estimat
   Say(options, "discover: fitting the declared model (" +
                    std::to_string(declared.parameters.FreeIndices().size()) + " free parameters)" +
                    (warm != nullptr ? " from its fit on the search window" : ""));
+  auto fit_declared = [&] {
+    return Timed(out, kDeclaredFit,
+                 [&] { return FitOutputError(start_vehicle, logs, declared_fit); });
+  };
   OutputErrorResult fit;
   if (warm != nullptr) {
     start_vehicle.parameters = warm->parameters;
     declared_fit.segment_schedule_s = {o->fit.segment_schedule_s.back()};
     if (warm->scale_held_in_solve) declared_fit.scale_free_in_solve = false;
     out->start = "from the declared fit on the search window (" + warm_start + ")";
-    fit = Timed(out, kDeclaredFit, [&] { return FitOutputError(start_vehicle, logs, declared_fit); });
+    fit = fit_declared();
     if (fit.usable) {
       return Settled(declared, declared, std::move(fit), logs, *o, options, out, &out->start,
                      restart_warm_fit);
@@ -474,7 +478,7 @@ OutputErrorResult FitDeclared(const Vehicle& declared, const std::vector<Estimat
       out->start = ekf.note + "; starting values from the config";
     }
   }
-  fit = Timed(out, kDeclaredFit, [&] { return FitOutputError(start_vehicle, logs, declared_fit); });
+  fit = fit_declared();
   if (!fit.usable && !fit.scale_move_failed && from_ekf) {
     // The EKF's values can start the fit where the model cannot be integrated
     // (measured: seed 11183 of the controllers' study, a swashplate bias,
@@ -485,7 +489,7 @@ OutputErrorResult FitDeclared(const Vehicle& declared, const std::vector<Estimat
     out->start += "; its fit failed: starting values from the config";
     start_vehicle = declared;
     declared_fit.segment_schedule_s = o->fit.segment_schedule_s;
-    fit = Timed(out, kDeclaredFit, [&] { return FitOutputError(start_vehicle, logs, declared_fit); });
+    fit = fit_declared();
   }
   if (!fit.usable && fit.scale_move_failed) {
     // The declared model needs a scale member beyond its bounds (e.g. the
@@ -496,7 +500,7 @@ OutputErrorResult FitDeclared(const Vehicle& declared, const std::vector<Estimat
                      "; refitting with the scale held in the solve (a symptom of a missing effect)");
     o->fit.scale_free_in_solve = false;
     declared_fit.scale_free_in_solve = false;
-    fit = Timed(out, kDeclaredFit, [&] { return FitOutputError(start_vehicle, logs, declared_fit); });
+    fit = fit_declared();
   }
   if (!fit.usable) throw ComputationError("the declared model's fit failed: " + fit.why_not_usable);
   return Settled(declared, declared, std::move(fit), logs, *o, options, out, &out->start);
@@ -540,9 +544,8 @@ LoopState AtBaseline(const std::vector<EstimationLog>& estimation, const Discove
                      const DiscoveryOptions& options, DiscoveryResult* out) {
   LoopState s;
   s.now = out->baseline;
-  s.pass = Timed(out, kSensitivities, [&] {
-    return LinearisePass(s.now.vehicle, s.now.result, estimation, o.fit);
-  });
+  s.pass = Timed(out, kSensitivities,
+                 [&] { return LinearisePass(s.now.vehicle, s.now.result, estimation, o.fit); });
   Say(options, "discover: sensitivities of " + std::to_string(s.pass.candidates.size()) +
                    " candidate effects along the fit: " + NumberText(s.pass.seconds, "%.1f s"));
   return s;
@@ -586,7 +589,8 @@ int Rounds(const Vehicle& declared, int first_round, int last_change_round,
           });
           Vehicle v = pass.fitted;
           v.parameters = fit.parameters;
-          pass = Timed(out, kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
+          pass =
+              Timed(out, kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
           now = Timed(out, kSnapshots,
                       [&] { return Snapshot(v, fit, estimation, validation, options); });
         }
@@ -607,8 +611,8 @@ int Rounds(const Vehicle& declared, int first_round, int last_change_round,
       const int best = refits.choice.added;
       if (best >= 0) {
         const CandidateScore& s = scores[refits.shortlist[best]];
-        Say(options, "discover: added " + s.effect + " (Wald p = " +
-                         NumberText(s.wald_p_value, "%.3g") + ", removes " +
+        Say(options, "discover: added " + s.effect +
+                         " (Wald p = " + NumberText(s.wald_p_value, "%.3g") + ", removes " +
                          NumberText(100 * s.share_of_excess, "%.0f") +
                          " % of its channels' excess error)");
         adopt(std::move(refits.refits[best]));
@@ -657,8 +661,7 @@ int Rounds(const Vehicle& declared, int first_round, int last_change_round,
 // others whole. Empty if no log is cut (the loop then searches the whole
 // logs).
 std::vector<EstimationLog> SearchWindowLogs(const std::vector<EstimationLog>& estimation,
-                                            double search_window_s,
-                                            std::vector<std::string>* cut) {
+                                            double search_window_s, std::vector<std::string>* cut) {
   if (!(search_window_s > 0)) return {};
   std::vector<EstimationLog> window;
   for (const EstimationLog& log : estimation) {
@@ -720,7 +723,8 @@ bool ConfirmOnWholeLogs(const Vehicle& declared, const ModelSnapshot& window_fin
   fit = Settled(model, declared, std::move(fit), estimation, o, options, out, nullptr);
   Vehicle v = model;
   v.parameters = fit.parameters;
-  state->pass = Timed(out, kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
+  state->pass =
+      Timed(out, kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
   const std::string failed = Timed(out, kSnapshots, [&] {
     state->now = Snapshot(v, fit, estimation, {}, options);
     return TryAddValidation(validation, options, &state->now);
@@ -753,13 +757,15 @@ void Conclude(const Vehicle& declared, const std::vector<EstimationLog>& estimat
         at_bound ? NumberText(b.value, "%.4g") +
                        (b.value - b.lower < b.upper - b.value ? ", its lower bound" : ", its upper bound")
                  : "a value far outside its physical range: " + b.why_outside;
-    b.text = "the declared fit left " + b.parameter + " at " + where +
-             ": a symptom of a missing effect; it distorts " + (channels.empty() ? "no channel" : channels) +
-             (out->added.empty() ? std::string()
-              : b.released      ? (at_bound ? "; the final model moved it back inside its bounds"
-                                            : "; the final model moved it back towards its physical range")
-                                : (at_bound ? "; it stays at the bound in the final model"
-                                            : "; it stays far outside its range in the final model"));
+    b.text =
+        "the declared fit left " + b.parameter + " at " + where +
+        ": a symptom of a missing effect; it distorts " +
+        (channels.empty() ? "no channel" : channels) +
+        (out->added.empty() ? std::string()
+         : b.released       ? (at_bound ? "; the final model moved it back inside its bounds"
+                                        : "; the final model moved it back towards its physical range")
+                            : (at_bound ? "; it stays at the bound in the final model"
+                                        : "; it stays far outside its range in the final model"));
     Say(options, "discover: " + b.text);
   }
 
@@ -883,7 +889,8 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
     }
   }
   if (!have_baseline) {  // no window, or its search failed
-    const OutputErrorResult fit = FitDeclared(declared, estimation, nullptr, "", true, options, &o, &out);
+    const OutputErrorResult fit =
+        FitDeclared(declared, estimation, nullptr, "", true, options, &o, &out);
     SetBaseline(declared, fit, estimation, validation, options, &out);
     state = AtBaseline(estimation, o, options, &out);
   }
@@ -960,14 +967,11 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
   }
   const DiscoveryResult::SearchWindow& w = r.search_window;
   const nlohmann::json search_window =
-      w.logs.empty() ? nlohmann::json()
-                     : nlohmann::json{{"seconds", w.seconds},
-                                      {"logs", w.logs},
-                                      {"used", w.used},
-                                      {"rounds", w.rounds},
-                                      {"added", w.added},
-                                      {"start", w.start},
-                                      {"note", w.note}};
+      w.logs.empty()
+          ? nlohmann::json()
+          : nlohmann::json{{"seconds", w.seconds}, {"logs", w.logs},   {"used", w.used},
+                           {"rounds", w.rounds},   {"added", w.added}, {"start", w.start},
+                           {"note", w.note}};
   return {{"fitted_logs", fitted_logs},
           {"search_window", search_window},
           {"baseline", SnapshotJson(r.baseline, has_validation)},

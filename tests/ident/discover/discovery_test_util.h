@@ -53,4 +53,16 @@ inline void ExpectWithinThreeStd(const DiscoveryResult& r, const Vehicle& truth,
   ADD_FAILURE() << name << " not estimated";
 }
 
+// The three gyro biases of a truth without the library's gyro_bias (the
+// scenario's sensor model reads r `b_r` high) within 3 std of (0, 0, b_r).
+inline void ExpectGyroBiasWithinThreeStd(const DiscoveryResult& r, const Vehicle& truth,
+                                         double b_r) {
+  std::map<std::string, ParameterOverride> biases;
+  biases["b_r"] = Value(b_r);
+  const Vehicle with_bias = WithEffect(truth, "gyro_bias", biases);
+  for (const char* name : {"gyro_bias.b_p", "gyro_bias.b_q", "gyro_bias.b_r"}) {
+    ExpectWithinThreeStd(r, with_bias, name);
+  }
+}
+
 }  // namespace coaxid

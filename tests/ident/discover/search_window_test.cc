@@ -67,17 +67,12 @@ TEST(SearchWindow, WhatTheWindowFindsIsConfirmedAndEstimatedOnTheWholeLog) {
   EXPECT_TRUE(RoundOnTheWholeLogs(r));
   // The baseline and the final model are fits of the whole log (at the fit
   // rate), not of the window.
-  const int rows = r.estimation.at(0).log.NumRows();
-  EXPECT_GT(r.estimation.at(0).log.inputs.times().back() - r.estimation.at(0).log.inputs.times().front(), 23);
+  const EstimationLog& whole = r.estimation.at(0).log;
+  const int rows = whole.NumRows();
+  EXPECT_GT(whole.inputs.times().back() - whole.inputs.times().front(), 23);
   EXPECT_EQ(r.baseline.result.predictions.at(0).rows(), rows);
   EXPECT_EQ(r.final.result.predictions.at(0).rows(), rows);
-  Vehicle with_bias = truth;
-  std::map<std::string, ParameterOverride> biases;
-  biases["b_r"] = Value(0.05);
-  with_bias = WithEffect(with_bias, "gyro_bias", biases);
-  for (const char* name : {"gyro_bias.b_p", "gyro_bias.b_q", "gyro_bias.b_r"}) {
-    ExpectWithinThreeStd(r, with_bias, name);
-  }
+  ExpectGyroBiasWithinThreeStd(r, truth, 0.05);
 }
 
 TEST(SearchWindow, AGroundEffectAfterTheWindowIsFoundOnTheWholeLog) {
@@ -92,7 +87,9 @@ TEST(SearchWindow, AGroundEffectAfterTheWindowIsFoundOnTheWholeLog) {
   EXPECT_TRUE(r.search_window.added.empty());
   EXPECT_EQ(r.added, std::vector<std::string>{"ground_effect"});
   for (const CandidateScore& s : r.candidates) {
-    if (s.confirmed) EXPECT_GT(s.round, r.search_window.rounds) << s.effect << " confirmed on the window";
+    if (s.confirmed) {
+      EXPECT_GT(s.round, r.search_window.rounds) << s.effect << " confirmed on the window";
+    }
   }
 }
 
