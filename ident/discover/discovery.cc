@@ -876,13 +876,17 @@ DiscoveryResult Discover(const Vehicle& declared, const std::vector<EstimationLo
         state = AtBaseline(estimation, o, options, &out);
       } else if (!ConfirmOnWholeLogs(declared, w.final, estimation, validation, rounds + 1, o,
                                      options, &state, &out)) {
+        // The whole search from the start, its declared fit restarted off
+        // its bounds as the rounds need it.
         confirmed = false;
-        out.search_window.note = "the window's model could not be fitted to the whole logs";
+        have_baseline = false;
+        out.search_window.note =
+            "the window's model could not be fitted to the whole logs or simulated on the "
+            "held-out logs";
         Say(options, "discover: " + out.search_window.note + ": searching the whole logs");
         out.added.clear();
         out.candidates.clear();
         out.removed.clear();
-        state = AtBaseline(estimation, o, options, &out);
       }
       out.search_window.used = confirmed;
       if (confirmed) first_round = last_change_round = rounds + 1;
