@@ -183,6 +183,12 @@ std::string ReportMarkdown(const DiscoveryResult& r, const std::vector<std::stri
     o << "\n";
   }
   for (const RemovedEffect& e : r.removed) {
+    if (e.on_whole_logs) {
+      o << "\nRemoved " << e.effect << " again: the search window added it, but on the whole "
+        << "logs, the rest refitted warm without it, it removes only "
+        << ShareText(e.share_of_excess, e.share_of_excess_held_out) << ".\n";
+      continue;
+    }
     if (e.made_redundant_by.empty()) {
       o << "\nRemoved " << e.effect << " again: without it, the rest refitted warm from its refit, "
         << "it removes only " << ShareText(e.share_of_excess, e.share_of_excess_held_out)

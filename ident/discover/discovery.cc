@@ -256,12 +256,13 @@ bool DiscoveryOptions::IsValid(std::string* why) const {
 // at 0.13-0.9 m, flight only, round 2: wind's refit from sigma0 restarted
 // "removed" 48 % of the excess with Wald p = 6e-5; without wind, warm from
 // that refit, the declared model keeps the gain), and then it is credited
-// with the basin, not the effect. The least useful such effect leaves the
-// model: *pass and *now become the fit without it. False if none is
-// redundant.
+// with the basin, not the effect. on_whole_logs: the effects the search
+// window added, judged on the whole logs (no later addition to credit). The
+// least useful such effect leaves the model: *pass and *now become the fit
+// without it. False if none is redundant.
 bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
                          const std::vector<EstimationLog>& validation, const DiscoveryOptions& o,
-                         int round, CandidatePass* pass, ModelSnapshot* now,
+                         int round, bool on_whole_logs, CandidatePass* pass, ModelSnapshot* now,
                          DiscoveryResult* out) {
   const std::string& latest = out->added.back();
   int worst = -1;
@@ -288,7 +289,8 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
         pass->fitted, EffectParameterNames(effect), estimation, pass->fit.noise);
     RemovedEffect r;
     r.effect = effect;
-    r.made_redundant_by = itself ? std::string() : latest;
+    r.made_redundant_by = itself || on_whole_logs ? std::string() : latest;
+    r.on_whole_logs = on_whole_logs;
     r.round = round;
     const ExcessShare estimation_share =
         ShareOfExcessRemoved(snapshot.fit, now->fit, snapshot.residual_tests, channels);
@@ -301,7 +303,7 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
     Say(o, "  without " + effect + ", warm from the current fit (" +
                NumberText(SecondsSince(t0), "%.1f s") + "): it removes " +
                ShareText(r.share_of_excess, r.share_of_excess_held_out) +
-               (itself ? std::string() : " in the model with " + latest));
+               (itself || on_whole_logs ? std::string() : " in the model with " + latest));
     const bool material =
         r.share_of_excess >= o.min_share_of_excess &&
         !(std::isfinite(r.share_of_excess_held_out) &&
@@ -316,7 +318,8 @@ bool DropRedundantEffect(const std::vector<EstimationLog>& estimation,
   }
   if (worst < 0) return false;
   Say(o, "discover: removed " + worst_removed.effect +
-             (worst_removed.made_redundant_by.empty()
+             (on_whole_logs ? ": the search window added it, the whole logs do not bear it out"
+              : worst_removed.made_redundant_by.empty()
                   ? ": its refit's gain came from the other parameters, not from it"
                   : ": made redundant by " + latest));
   out->added.erase(out->added.begin() + worst);
@@ -641,7 +644,7 @@ int Rounds(const Vehicle& declared, int first_round, int last_change_round,
         // cg_offset was taken out and wind, judged once, stayed).
         const std::string latest = out->added.back();
         Timed(out, kJudgedAgain, [&] {
-          while (DropRedundantEffect(estimation, validation, o, round, &pass, &now, out) &&
+          while (DropRedundantEffect(estimation, validation, o, round, false, &pass, &now, out) &&
                  std::find(out->added.begin(), out->added.end(), latest) != out->added.end()) {
           }
         });
@@ -734,8 +737,8 @@ bool ConfirmOnWholeLogs(const Vehicle& declared, const ModelSnapshot& window_fin
     return false;
   }
   Timed(out, kJudgedAgain, [&] {
-    while (!out->added.empty() &&
-           DropRedundantEffect(estimation, validation, o, round, &state->pass, &state->now, out)) {
+    while (!out->added.empty() && DropRedundantEffect(estimation, validation, o, round, true,
+                                                      &state->pass, &state->now, out)) {
     }
   });
   return true;
@@ -953,6 +956,7 @@ nlohmann::json DiscoveryJson(const DiscoveryResult& r, const DiscoveryOptions& o
                        {"made_redundant_by", e.made_redundant_by.empty()
                                                  ? nlohmann::json()  // itself: its refit's basin
                                                  : nlohmann::json(e.made_redundant_by)},
+                       {"on_whole_logs", e.on_whole_logs},
                        {"round", e.round},
                        {"share_of_excess", e.share_of_excess},
                        {"share_of_excess_held_out", std::isfinite(e.share_of_excess_held_out)

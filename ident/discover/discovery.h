@@ -205,11 +205,16 @@ struct ParameterSymptom {
 // removes less than min_share_of_excess of its channels' excess error (step 5
 // judged again): an earlier one that a later one made redundant, or the one
 // just added whose refit gained by moving the declared parameters into a
-// better basin. It was taken out, and is not a candidate again until the
+// better basin; or one the search window added that removes too little on
+// the whole logs. It was taken out, and is not a candidate again until the
 // model's effects have changed (ExcludedEffects).
 struct RemovedEffect {
   std::string effect;
-  std::string made_redundant_by;  // the effect added in that round; empty: itself
+  // The effect added in that round; empty: itself, or on_whole_logs.
+  std::string made_redundant_by;
+  // Added on the search window, judged again on the whole logs
+  // (DiscoveryOptions::search_window_s).
+  bool on_whole_logs = false;
   int round = 0;
   double share_of_excess = 0;           // what it still removed, estimation data
   double share_of_excess_held_out = 0;  // NaN: no held-out data can judge it
