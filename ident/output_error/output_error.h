@@ -273,6 +273,8 @@ nlohmann::json ParametersJson(const OutputErrorResult& result);
 // balance logs through the static model; flight logs over consecutive windows
 // of window_s, each started from a state estimated on that window alone with
 // the parameters held fixed (an honest validation for an unstable plant).
+// A hold too stiff for the fits' RK4 step is integrated, not refused
+// (options.integrator.stiff_holds_fail is not applied).
 std::vector<Eigen::MatrixXd> PredictWithFixedParameters(const Vehicle& vehicle,
                                                         const std::vector<EstimationLog>& logs,
                                                         const NoiseWeights& noise,
