@@ -787,9 +787,9 @@ std::vector<Eigen::MatrixXd> PredictWithFixedParameters(const Vehicle& vehicle,
   // stiff for one RK4 step (IntegratorOptions::stiff_holds_fail) as a trial
   // point outside the physical range, but a model a fit accepted can meet
   // such a mode on a flight it was not fitted to (measured: seed 22774 of
-  // the controllers' study, the declared fit with Izz near its lower bound,
-  // on its held-out flight; the whole discover run failed). Those holds go
-  // to the integrator, as in the simulator.
+  // the controllers' study, the declared fit with Ixx 31 times the truth's
+  // and Iyy a fourteenth of it, on its held-out flight; the whole discover
+  // run failed). Those holds go to the integrator, as in the simulator.
   OutputErrorOptions options = fit_options;
   options.integrator.stiff_holds_fail = false;
   // Only the window start states are free: one small fit per window.
