@@ -46,9 +46,9 @@ if [ "${1:-}" = "--sanitize" ]; then
   # The same on two draws of a CG offset beside a bar, and with a paired
   # refit (25-42 s in Release): RefitBesideABound runs in the Release tests only.
   SANITIZE_SKIP+='|^DiscoverPairCli\.'
-  # The same on a draw whose model without an added effect fails on the
-  # held-out flight (25 s in Release): the branch is a catch in
-  # DropRedundantEffect, whose other paths run here.
+  # The same on a draw of a CG offset beside gyroscopic moments (25 s in
+  # Release; its model without the CG offset failed on the held-out flight
+  # until 8a5ad62); held-out predictions run here in HeldOutPrediction.
   SANITIZE_SKIP+='|^DiscoverHeldOutFailureCli\.'
   # The same for a declared fit that fails from the EKF start (5-10 s in
   # Release): the fallback is a branch of Discover, whose other paths run here.
