@@ -586,30 +586,16 @@ int Rounds(const Vehicle& declared, int first_round, int last_change_round,
       auto adopt = [&](CandidateRefit&& refit) {
         pass = std::move(refit.next);
         now = std::move(refit.snapshot);
-        if (pass.fit.hit_iteration_limit) {
-          const OutputErrorResult fit = Timed(out, kContinued, [&] {
-            return Converged(pass.fitted, pass.fit, estimation, o.fit, options);
-          });
-          Vehicle v = pass.fitted;
-          v.parameters = fit.parameters;
-          pass =
-              Timed(out, kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
-          now = Timed(out, kSnapshots,
-                      [&] { return Snapshot(v, fit, estimation, validation, options); });
-        }
-        std::string restart_note;
-        OutputErrorResult restarted = Timed(out, kRestarts, [&] {
-          return RestartedOffBounds(pass.fitted, declared, pass.fit, estimation, o.fit, options,
-                                    &restart_note);
-        });
-        if (!restart_note.empty()) {
-          Vehicle v = pass.fitted;
-          v.parameters = restarted.parameters;
-          pass = Timed(out, kSensitivities,
-                       [&] { return LinearisePass(v, restarted, estimation, o.fit); });
-          now = Timed(out, kSnapshots,
-                      [&] { return Snapshot(v, restarted, estimation, validation, options); });
-        }
+        const bool capped = pass.fit.hit_iteration_limit;
+        std::string restart_note;  // not empty: a restart was kept
+        const OutputErrorResult fit = Settled(pass.fitted, declared, pass.fit, estimation, o,
+                                              options, out, &restart_note);
+        if (!capped && restart_note.empty()) return;  // the refit's own fit, as it was
+        Vehicle v = pass.fitted;
+        v.parameters = fit.parameters;
+        pass = Timed(out, kSensitivities, [&] { return LinearisePass(v, fit, estimation, o.fit); });
+        now = Timed(out, kSnapshots,
+                    [&] { return Snapshot(v, fit, estimation, validation, options); });
       };
       const int best = refits.choice.added;
       if (best >= 0) {

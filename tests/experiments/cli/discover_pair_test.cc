@@ -97,7 +97,8 @@ TEST_F(DiscoverPairCli, ACgOffsetBesideABarIsFoundWithIt) {
 // round 1 and the ground effect in round 2, no pair needed.
 TEST_F(DiscoverPairCli, WindThatIsNotSignificantAloneHoldsBackAStandInAndIsAddedAsAPair) {
   RandomDraw draw;
-  const nlohmann::json j = DiscoverFlightOnly(21253, "ground_effect+wind", &draw, "--search_window_s=0");
+  const nlohmann::json j =
+      DiscoverFlightOnly(21253, "ground_effect+wind", &draw, "--search_window_s=0");
   ASSERT_FALSE(j.is_null());
   ASSERT_EQ(SortedAdded(j), (std::vector<std::string>{"ground_effect", "wind"}))
       << j["added"].dump();
