@@ -131,13 +131,16 @@ std::vector<RefitOfRound> Judged(const std::vector<CandidateRefit>& refits,
 // first that qualifies and removes at least decisive_share_of_all_excess of
 // the excess over all channels decides: those ranked below it are not
 // refitted. Those from `waits_from` on count only if the round adds none of
-// those before them (ChooseOfRound), and are refitted only then.
+// those before them (ChooseOfRound), and are refitted only then, or when the
+// one it adds leaves out a channel of `lost_channels` they act on
+// (LostChannelsOutOfReach, shortlist.h).
 std::vector<CandidateRefit> RefitInRankOrder(
     const CandidatePass& pass, const std::vector<EstimationLog>& estimation,
     const std::vector<EstimationLog>& validation, const ModelSnapshot& now,
     const std::vector<int>& shortlist, size_t family,
     const std::map<std::string, double>& declared_at_bounds, std::vector<CandidateScore>* scores,
-    const DiscoveryOptions& o, DiscoveryClock::time_point start, size_t waits_from = SIZE_MAX) {
+    const DiscoveryOptions& o, DiscoveryClock::time_point start, size_t waits_from = SIZE_MAX,
+    const std::vector<std::string>& lost_channels = {}) {
   const int n = static_cast<int>(shortlist.size());
   const int waiting = static_cast<int>(std::min<size_t>(waits_from, shortlist.size()));
   std::vector<CandidateRefit> refits(n);
@@ -246,11 +249,18 @@ std::vector<CandidateRefit> RefitInRankOrder(
                     o.min_channels_excess, o.decisive_share_of_all_excess, o.min_share_of_excess);
   std::vector<char> set_aside(n, 0);
   if (before.added >= 0) {
-    const std::string& effect = (*scores)[shortlist[before.added]].effect;
+    const CandidateScore& added = (*scores)[shortlist[before.added]];
+    const std::vector<std::string> out_of_reach =
+        decided_by == n ? LostChannelsOutOfReach(lost_channels, added.channels)
+                        : std::vector<std::string>();
     for (int k = waiting; k < n; ++k) {
-      set_back(k, "not refitted: " + effect +
+      if (ReachesAny((*scores)[shortlist[k]].channels, out_of_reach)) {
+        refit_range(k, k + 1);
+        continue;
+      }
+      set_back(k, "not refitted: " + added.effect +
                   ", refitted before it, qualifies; the next round tests it against the "
-                  "model with " + effect);
+                  "model with " + added.effect);
       set_aside[k] = 1;
     }
   } else {
@@ -408,26 +418,41 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
   r.shortlist = list.first;
   r.shortlist.insert(r.shortlist.end(), list.after_passing.begin(), list.after_passing.end());
   r.refits = RefitInRankOrder(pass, estimation, validation, now, r.shortlist, family, at_bounds,
-                              scores, o, start, list.first.size());
+                              scores, o, start, list.first.size(), lost);
   const RoundChoice slots =
       ChooseOfRound(Judged(r, *scores), WaldLevel(o, family), o.min_channels_excess,
                     o.decisive_share_of_all_excess, o.min_share_of_excess);
-  if (slots.added >= 0 && !list.on_lost_channels.empty()) {
-    // Measured (bench/discover_speed.sh, 41 flight-only logs): the lost
-    // channels widened rounds to up to eleven refits in 15 of the logs,
-    // among them every log beyond 20 s.
-    const std::string& effect = (*scores)[r.shortlist[slots.added]].effect;
+  // Those beyond the slots wait for them as the slots' own waiting ones do
+  // (RefitInRankOrder). Measured (bench/discover_speed.sh, 41 flight-only
+  // logs): the lost channels widened rounds to up to eleven refits in 15 of
+  // the logs, among them every log beyond 20 s.
+  std::vector<int> beyond;
+  std::vector<std::string> out_of_reach = lost;
+  if (slots.added >= 0) {
+    const CandidateScore& added = (*scores)[r.shortlist[slots.added]];
+    out_of_reach = LostChannelsOutOfReach(lost, added.channels);
     for (int k : list.on_lost_channels) {
       CandidateScore& s = (*scores)[k];
-      s.why_not_confirmed = "not refitted: " + effect +
+      if (ReachesAny(s.channels, out_of_reach)) {
+        beyond.push_back(k);
+        continue;
+      }
+      s.why_not_confirmed = "not refitted: " + added.effect +
                             ", refitted in the slots before it, qualifies; the next round tests "
-                            "it against the model with " + effect;
+                            "it against the model with " + added.effect;
       Say(o, "  refit " + s.effect + ": " + s.why_not_confirmed);
     }
-  } else if (!list.on_lost_channels.empty()) {
-    Say(o, "  none of the slots' refits is added: refitting those acting on the lost channels");
+  } else {
+    beyond = list.on_lost_channels;
+  }
+  if (!beyond.empty()) {
+    Say(o, slots.added >= 0
+               ? "  " + (*scores)[r.shortlist[slots.added]].effect + " leaves " +
+                     Joined(out_of_reach) + " out of its reach: refitting those acting there"
+               : "  none of the slots' refits is added: refitting those acting on the lost "
+                 "channels");
     RoundRefits more;
-    more.shortlist = list.on_lost_channels;
+    more.shortlist = beyond;
     more.refits = RefitInRankOrder(pass, estimation, validation, now, more.shortlist, family,
                                    at_bounds, scores, o, start);
     r.shortlist.insert(r.shortlist.end(), more.shortlist.begin(), more.shortlist.end());
