@@ -132,8 +132,8 @@ std::vector<RefitOfRound> Judged(const std::vector<CandidateRefit>& refits,
 // the excess over all channels decides: those ranked below it are not
 // refitted. Those from `waits_from` on count only if the round adds none of
 // those before them (ChooseOfRound), and are refitted only then, or when the
-// one it adds leaves out a channel of `lost_channels` they act on
-// (LostChannelsOutOfReach, shortlist.h).
+// one it adds still loses a channel of `lost_channels` they act on: its
+// refit predicts it no better than the mean (LostChannels, shortlist.h).
 std::vector<CandidateRefit> RefitInRankOrder(
     const CandidatePass& pass, const std::vector<EstimationLog>& estimation,
     const std::vector<EstimationLog>& validation, const ModelSnapshot& now,
@@ -250,11 +250,12 @@ std::vector<CandidateRefit> RefitInRankOrder(
   std::vector<char> set_aside(n, 0);
   if (before.added >= 0) {
     const CandidateScore& added = (*scores)[shortlist[before.added]];
-    const std::vector<std::string> out_of_reach =
-        decided_by == n ? LostChannelsOutOfReach(lost_channels, added.channels)
+    const ModelSnapshot& with_it = refits[before.added].snapshot;
+    const std::vector<std::string> still_lost =
+        decided_by == n ? LostChannels(with_it.fit, with_it.residual_tests, lost_channels)
                         : std::vector<std::string>();
     for (int k = waiting; k < n; ++k) {
-      if (ReachesAny((*scores)[shortlist[k]].channels, out_of_reach)) {
+      if (ReachesAny((*scores)[shortlist[k]].channels, still_lost)) {
         refit_range(k, k + 1);
         continue;
       }
@@ -427,13 +428,14 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
   // logs): the lost channels widened rounds to up to eleven refits in 15 of
   // the logs, among them every log beyond 20 s.
   std::vector<int> beyond;
-  std::vector<std::string> out_of_reach = lost;
+  std::vector<std::string> still_lost = lost;
   if (slots.added >= 0) {
     const CandidateScore& added = (*scores)[r.shortlist[slots.added]];
-    out_of_reach = LostChannelsOutOfReach(lost, added.channels);
+    const ModelSnapshot& with_it = r.refits[slots.added].snapshot;
+    still_lost = LostChannels(with_it.fit, with_it.residual_tests, lost);
     for (int k : list.on_lost_channels) {
       CandidateScore& s = (*scores)[k];
-      if (ReachesAny(s.channels, out_of_reach)) {
+      if (ReachesAny(s.channels, still_lost)) {
         beyond.push_back(k);
         continue;
       }
@@ -447,8 +449,9 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
   }
   if (!beyond.empty()) {
     Say(o, slots.added >= 0
-               ? "  " + (*scores)[r.shortlist[slots.added]].effect + " leaves " +
-                     Joined(out_of_reach) + " out of its reach: refitting those acting there"
+               ? "  " + (*scores)[r.shortlist[slots.added]].effect + "'s refit still predicts " +
+                     Joined(still_lost) + " no better than their mean: refitting those acting "
+                     "there"
                : "  none of the slots' refits is added: refitting those acting on the lost "
                  "channels");
     RoundRefits more;

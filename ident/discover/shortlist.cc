@@ -106,13 +106,4 @@ std::vector<std::string> LostChannels(const std::map<std::string, FitError>& fit
   return lost;
 }
 
-std::vector<std::string> LostChannelsOutOfReach(const std::vector<std::string>& lost,
-                                                const std::vector<std::string>& channels) {
-  std::vector<std::string> out_of_reach;
-  for (const std::string& c : lost) {
-    if (!ReachesAny(channels, {c})) out_of_reach.push_back(c);
-  }
-  return out_of_reach;
-}
-
 }  // namespace coaxid

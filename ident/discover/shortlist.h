@@ -25,11 +25,6 @@ std::vector<std::string> LostChannels(const std::map<std::string, FitError>& fit
                                       const std::vector<ChannelResidualTest>& residual_tests,
                                       const std::vector<std::string>& symptom_channels);
 
-// The lost channels (LostChannels) that none of `channels`, those a
-// qualifying candidate reaches, is: what its refit leaves the fit without.
-std::vector<std::string> LostChannelsOutOfReach(const std::vector<std::string>& lost,
-                                                const std::vector<std::string>& channels);
-
 // The candidates to refit (indices into scores), none of `excluded` (removed
 // effects not yet allowed back, ExcludedEffects): at most max_refits of those
 // that pass the linearised test; then, if the current fit holds parameters at a
@@ -90,21 +85,21 @@ std::vector<std::string> LostChannelsOutOfReach(const std::vector<std::string>& 
 // the bias last (a share of 152 %), neither was refitted, nothing added).
 // They are refitted after the others, and only when none of those is added
 // (RefitShortlisted): a round that finds its effect among the slots does
-// not need them, unless the one it finds does not reach every lost channel
-// (LostChannelsOutOfReach): then those acting on a lost channel it leaves
-// out are refitted too, and the round chooses among them all (measured,
+// not need them, unless the fit with the one it finds still loses some of
+// them (LostChannels at its refit): then those acting on a channel still
+// lost are refitted too, and the round chooses among them all (measured,
 // seed 22946 of discover_controllers.yaml, 60 s, flight only, hover, a CG
 // offset beside a stabilizer bar at T_b = 1.9 s, the declared fit with Ixx
 // and Iyy at their upper bound and p, q, ax lost: wind, blind at the bounds,
-// qualified on u, v, w, ax, ay, az, and the bar, waiting for the slots, was
-// never refitted in round 1; wind was added, p and q stayed unexplained in
-// 38.6 s. Refitted, the bar takes T_b to its bound and removes 91 % of the
-// excess over all channels, holds wind back (round_choice.h) and is added
-// with the CG offset as a pair, in 13 s).
+// qualified on u, v, w, ax, ay, az and left p, q lost, and the bar, waiting
+// for the slots, was never refitted in round 1; wind was added, p and q
+// stayed unexplained in 38.6 s. Refitted, the bar takes T_b to its bound and
+// removes 91 % of the excess over all channels, holds wind back
+// (round_choice.h) and is added with the CG offset as a pair, in 13-15 s).
 // Where some candidates pass their score test, the at-bounds slots' ones
 // (passing beyond the first slots, or failing it, shortlisted for acting on
 // a distorted channel) count only if none of the first slots' refits is
-// added, or the one added leaves out a lost channel they act on
+// added, or the fit with the one added still loses a channel they act on
 // (`after_passing`; they are
 // refitted after those, and only then): the
 // next round tests them against the model with it (measured, seed 20622 of

@@ -24,9 +24,8 @@
 // low, in the judged set of 2026-12-07; 50-90 s, too long for a test.)
 //
 // A bar the round never refitted because wind qualified before it, though
-// wind leaves the rates the fit had lost out of its reach (shortlist.h,
-// LostChannelsOutOfReach), on seed 22946 of the controllers' spec drawn at
-// 60 s, as bench/discover_speed.sh draws it.
+// the fit with wind still lost the rates (shortlist.h), on seed 22946 of
+// the controllers' spec drawn at 60 s, as bench/discover_speed.sh draws it.
 //
 // And a pair started from a refit that is not significant but removes far
 // more than the one that qualifies (ident/discover/round_choice.h), on seed
@@ -94,14 +93,15 @@ TEST_F(DiscoverPairCli, ACgOffsetBesideABarIsFoundWithIt) {
 // the change wind, blind at the bounds, qualified in round 1 on the
 // translational channels, the bar waited for the slots and was never
 // refitted; wind was added and p, q stayed unexplained (38.6 s). Now the
-// bar is refitted, since wind leaves p and q out of its reach: alone it
+// bar is refitted, since wind's refit still predicts p and q no better than
+// their mean: alone it
 // takes T_b to its bound and removes 91 % of the excess over all channels,
 // holds wind back, and is added with the CG offset as a pair (13-15 s).
 // Flight only, the scale is held (d at its config value): the bar's T_b and
 // k_b and the scale-free ratios of the CG offset and the hub height are
 // compared with the truth, within 3 of their reported std (the largest
 // measured: y_g / Ixx, 2.8).
-TEST_F(DiscoverPairCli, AQualifierThatLeavesTheLostRatesOutOfReachDoesNotStopTheBarsRefit) {
+TEST_F(DiscoverPairCli, AQualifierThatStillLosesTheRatesDoesNotStopTheBarsRefit) {
   StudySpec spec = ControllersSpec();
   spec.randomise.duration_s = {60, 60};
   const RandomDraw draw = DrawRun(spec, 22946);

@@ -201,16 +201,6 @@ TEST(LostChannels, PredictedNoBetterThanTheMeanAndWellAboveTheNoise) {
   EXPECT_TRUE(LostChannels(fit, tests, {}).empty());  // no parameter at a bound
 }
 
-TEST(LostChannels, OutOfReachAreThoseTheQualifyingCandidateDoesNotAct) {
-  // Seed 22946 (shortlist.h): wind acts on the translational channels, the
-  // fit has lost p, q and ax.
-  const std::vector<std::string> lost = {"p", "q", "ax"};
-  EXPECT_EQ(LostChannelsOutOfReach(lost, {"ax", "u", "ay", "v", "az", "w"}),
-            (std::vector<std::string>{"p", "q"}));
-  EXPECT_TRUE(LostChannelsOutOfReach(lost, {"ax", "ay", "u", "v", "p", "q"}).empty());
-  EXPECT_TRUE(LostChannelsOutOfReach({}, {"u"}).empty());
-}
-
 TEST(Shortlist, PassingFirstThenAtBoundsThenPromisingEachCapped) {
   const std::vector<CandidateScore> scores = {
       Score("a", 0.5, true),  Score("b", 0.9, true),    Score("c", 0.2, true),
