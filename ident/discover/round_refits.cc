@@ -248,6 +248,7 @@ std::vector<CandidateRefit> RefitInRankOrder(
       ChooseOfRound(Judged(refits, shortlist, *scores, judged_before), level,
                     o.min_channels_excess, o.decisive_share_of_all_excess, o.min_share_of_excess);
   std::vector<char> set_aside(n, 0);
+  std::string refitted_on_still_lost;  // why waiting ones were refitted though one qualified
   if (before.added >= 0) {
     const CandidateScore& added = (*scores)[shortlist[before.added]];
     const ModelSnapshot& with_it = refits[before.added].snapshot;
@@ -257,6 +258,10 @@ std::vector<CandidateRefit> RefitInRankOrder(
     for (int k = waiting; k < n; ++k) {
       if (ReachesAny((*scores)[shortlist[k]].channels, still_lost)) {
         refit_range(k, k + 1);
+        refitted_on_still_lost = "  " + added.effect + "'s refit still predicts " +
+                                 Joined(still_lost) +
+                                 " no better than their mean: those acting there were refitted "
+                                 "beside it";
         continue;
       }
       set_back(k, "not refitted: " + added.effect +
@@ -314,6 +319,7 @@ std::vector<CandidateRefit> RefitInRankOrder(
                  NumberText(pass.fit.final_cost, "%.6g") + "; the lowest is kept): " + starts);
     }
   }
+  if (!refitted_on_still_lost.empty()) Say(o, refitted_on_still_lost);
   return refits;
 }
 
