@@ -94,9 +94,9 @@ TEST_F(DiscoverPairCli, ACgOffsetBesideABarIsFoundWithIt) {
 // translational channels, the bar waited for the slots and was never
 // refitted; wind was added and p, q stayed unexplained (38.6 s). Now the
 // bar is refitted, since wind's refit still predicts p and q no better than
-// their mean: alone it
-// takes T_b to its bound and removes 91 % of the excess over all channels,
-// holds wind back, and is added with the CG offset as a pair (13-15 s).
+// their mean: alone it takes T_b to its bound and removes 91 % of the
+// excess over all channels, holds wind back, and is added with the CG
+// offset as a pair (12-15 s).
 // Flight only, the scale is held (d at its config value): the bar's T_b and
 // k_b and the scale-free ratios of the CG offset and the hub height are
 // compared with the truth, within 3 of their reported std (the largest
