@@ -137,10 +137,11 @@ struct DiscoveryOptions {
   // whole log with what it added declared): the same effects added as the
   // search of the whole logs in 122 of 122, 122 of 122 within 20 s (the
   // slowest, 51.4 s, then 18.3 s); the first 20 s alone missed 3 ground
-  // effects (docs/discover_confusion.md, session 37). Built in: 280 of 281
-  // fresh 60 s flight-only logs within 20 s, and on 960 fresh judged runs
-  // nothing wrong added (docs/discover_confusion.md, sessions 38-39). 0:
-  // whole logs only.
+  // effects (docs/discover_confusion.md, session 37). Built in: at bb0b920
+  // 287 of 287 60 s flight-only logs within 20 s (81 fresh, 206 timed
+  // again), and on 1199 fresh judged runs since f8bc7d1 one added
+  // something wrong (14287, the same before bb0b920; docs/discover_confusion.md,
+  // sessions 38-40). 0: whole logs only.
   double search_window_s = 20;
   // With a flight log, start the declared fit from a short EKF pass at the
   // final segment length (ident/ekf/ekf_start.h) instead of the config's

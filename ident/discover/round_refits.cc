@@ -120,6 +120,13 @@ std::string WhyNotConfirmed(const CandidateScore& s, double level, const Discove
 
 namespace {
 
+// "<effect>'s refit still predicts <channels> no better than their mean":
+// why the refits waiting behind a qualifying one run (shortlist.h).
+std::string StillLosesText(const std::string& effect, const std::vector<std::string>& still_lost) {
+  return "  " + effect + "'s refit still predicts " + Joined(still_lost) +
+         " no better than their mean";
+}
+
 std::vector<RefitOfRound> Judged(const std::vector<CandidateRefit>& refits,
                                  const std::vector<int>& shortlist,
                                  const std::vector<CandidateScore>& scores, size_t count);
@@ -258,10 +265,8 @@ std::vector<CandidateRefit> RefitInRankOrder(
     for (int k = waiting; k < n; ++k) {
       if (ReachesAny((*scores)[shortlist[k]].channels, still_lost)) {
         refit_range(k, k + 1);
-        refitted_on_still_lost = "  " + added.effect + "'s refit still predicts " +
-                                 Joined(still_lost) +
-                                 " no better than their mean: those acting there were refitted "
-                                 "beside it";
+        refitted_on_still_lost = StillLosesText(added.effect, still_lost) +
+                                 ": those acting there were refitted beside it";
         continue;
       }
       set_back(k, "not refitted: " + added.effect +
@@ -455,9 +460,8 @@ RoundRefits RefitShortlisted(const CandidatePass& pass, const ModelSnapshot& now
   }
   if (!beyond.empty()) {
     Say(o, slots.added >= 0
-               ? "  " + (*scores)[r.shortlist[slots.added]].effect + "'s refit still predicts " +
-                     Joined(still_lost) + " no better than their mean: refitting those acting "
-                     "there"
+               ? StillLosesText((*scores)[r.shortlist[slots.added]].effect, still_lost) +
+                     ": refitting those acting there"
                : "  none of the slots' refits is added: refitting those acting on the lost "
                  "channels");
     RoundRefits more;
