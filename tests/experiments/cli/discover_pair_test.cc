@@ -97,10 +97,16 @@ TEST_F(DiscoverPairCli, ACgOffsetBesideABarIsFoundWithIt) {
 // their mean: alone it takes T_b to its bound and removes 91 % of the
 // excess over all channels, holds wind back, and is added with the CG
 // offset as a pair (12-15 s).
-// Flight only, the scale is held (d at its config value): the bar's T_b and
-// k_b and the scale-free ratios of the CG offset and the hub height are
-// compared with the truth, within 3 of their reported std (the largest
-// measured: y_g / Ixx, 2.8).
+// The bar's refit is sensitive to rounding: in the sanitizer build (-O1)
+// it ends removing 46 % of all channels' excess, not 91 %, wind is added in
+// round 1, the pair in round 2, and wind is taken out as made redundant by
+// the CG offset. So the test asks what the change does on any build (the
+// bar refitted in round 1 though wind qualified) and where the loop ends
+// (the pair; wind, if added on the way, taken out), not which of the two
+// paths it took. Flight only, the scale is held (d at its config value):
+// the bar's T_b and k_b and the scale-free ratios of the CG offset and the
+// hub height are compared with the truth, within 3 of their reported std
+// (the largest measured: y_g / Ixx, 2.8).
 TEST_F(DiscoverPairCli, AQualifierThatStillLosesTheRatesDoesNotStopTheBarsRefit) {
   StudySpec spec = ControllersSpec();
   spec.randomise.duration_s = {60, 60};
@@ -111,15 +117,21 @@ TEST_F(DiscoverPairCli, AQualifierThatStillLosesTheRatesDoesNotStopTheBarsRefit)
   ASSERT_FALSE(j.is_null());
   ASSERT_EQ(SortedAdded(j), (std::vector<std::string>{"cg_offset", "stabilizer_bar"}))
       << j["added"].dump();
-  EXPECT_TRUE(j["removed"].empty()) << j["removed"].dump();
-  bool bar_refitted_beside_wind = false;
-  for (const nlohmann::json& c : j["candidates"]) {
-    bar_refitted_beside_wind |= c["effect"] == "wind" && c.value("round", 0) == 1 &&
-                                c.contains("refit") &&
-                                c["refit"].value("why_not_confirmed", std::string())
-                                        .find("stabilizer_bar 91 %") != std::string::npos;
+  for (const nlohmann::json& r : j["removed"]) {
+    EXPECT_EQ(r["effect"], "wind") << j["removed"].dump();
   }
-  EXPECT_TRUE(bar_refitted_beside_wind) << "found, but not through the bar's refit in round 1";
+  bool wind_qualified = false, bar_refitted = false;
+  for (const nlohmann::json& c : j["candidates"]) {
+    const bool paired = c.contains("beside") && !c["beside"].is_null();
+    if (c.value("round", 0) != 1 || paired || !c.contains("refit") || c["refit"].is_null()) {
+      continue;
+    }
+    wind_qualified |= c["effect"] == "wind" && c["refit"].value("share_of_excess_removed", 0.0) >=
+                                                   j["settings"]["min_share_of_excess"].get<double>();
+    bar_refitted |= c["effect"] == "stabilizer_bar";
+  }
+  EXPECT_TRUE(wind_qualified) << "the draw no longer shows the case this test is for";
+  EXPECT_TRUE(bar_refitted) << "wind qualified and the bar, waiting behind it, was not refitted";
   std::map<std::string, double> truth;
   for (const auto& [effect, overrides] : draw.scenarios[0].truth_effects) {
     for (const auto& [name, o] : overrides) {
